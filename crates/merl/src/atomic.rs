@@ -1,0 +1,117 @@
+//! Atomic file output: write a temporary file beside the target, sync it,
+//! then rename it over the target. A failed or interrupted write leaves the
+//! old file (if any) untouched and no partial file behind.
+
+use std::fs::File;
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+static COUNTER: AtomicU64 = AtomicU64::new(0);
+
+/// A temporary path in the same directory as `path` (so the final rename
+/// never crosses file systems), unique within this process.
+pub fn temp_path_for(path: &Path) -> PathBuf {
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    path.with_file_name(format!(".{name}.tmp-{}-{n}", std::process::id()))
+}
+
+/// Write `path` atomically: `fill` writes the whole content into a buffered
+/// temporary file, which is then synced and renamed over `path`.
+pub fn write_atomic<F>(path: &Path, fill: F) -> io::Result<()>
+where
+    F: FnOnce(&mut BufWriter<File>) -> io::Result<()>,
+{
+    let tmp = temp_path_for(path);
+    let result = (|| {
+        let mut w = BufWriter::with_capacity(1 << 20, File::create(&tmp)?);
+        fill(&mut w)?;
+        w.flush()?;
+        let file = w.into_inner().map_err(|e| e.into_error())?;
+        file.sync_all()?;
+        drop(file);
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// A file being written in place under a temporary name, for writers that
+/// need random access (positioned writes from several threads). Dropped
+/// without [`PendingFile::commit`], it removes itself.
+pub struct PendingFile {
+    tmp: PathBuf,
+    target: PathBuf,
+    file: Option<File>,
+}
+
+impl PendingFile {
+    /// Create the temporary file for `target`.
+    pub fn create(target: &Path) -> io::Result<PendingFile> {
+        let tmp = temp_path_for(target);
+        let file = File::options().read(true).write(true).create_new(true).open(&tmp)?;
+        Ok(PendingFile { tmp, target: target.to_path_buf(), file: Some(file) })
+    }
+
+    /// The open temporary file.
+    pub fn file(&self) -> &File {
+        self.file.as_ref().expect("file present until commit")
+    }
+
+    /// Sync and rename over the target.
+    pub fn commit(mut self) -> io::Result<()> {
+        let file = self.file.take().expect("file present until commit");
+        file.sync_all()?;
+        drop(file);
+        std::fs::rename(&self.tmp, &self.target)?;
+        self.tmp = PathBuf::new();
+        Ok(())
+    }
+}
+
+impl Drop for PendingFile {
+    fn drop(&mut self) {
+        if !self.tmp.as_os_str().is_empty() {
+            self.file.take();
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn failed_write_keeps_old_content_and_leaves_no_temp() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.bin");
+        write_atomic(&path, |w| w.write_all(b"good")).unwrap();
+        let err = write_atomic(&path, |w| {
+            w.write_all(b"half")?;
+            Err(io::Error::other("boom"))
+        });
+        assert!(err.is_err());
+        assert_eq!(std::fs::read(&path).unwrap(), b"good");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn pending_file_removes_itself_unless_committed() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("store");
+        {
+            let p = PendingFile::create(&path).unwrap();
+            p.file().set_len(10).unwrap();
+        }
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+        let p = PendingFile::create(&path).unwrap();
+        p.file().set_len(10).unwrap();
+        p.commit().unwrap();
+        assert_eq!(std::fs::metadata(&path).unwrap().len(), 10);
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+}

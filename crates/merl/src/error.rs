@@ -1,0 +1,107 @@
+//! The one error type of the MERL crate.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong reading or writing a MERL table.
+///
+/// Every variant names the file, and its message says what was expected,
+/// so a command-line tool can print it as its one line of diagnosis.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum MerlError {
+    /// The operating system refused to open, map, read or write the file.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the OS said.
+        source: std::io::Error,
+    },
+    /// The file is a Git LFS pointer, not the table it stands for.
+    #[error("{}: is a Git LFS pointer file, not MERL data (run `git lfs pull` to fetch the real table)", path.display())]
+    LfsPointer {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The file is too short to hold even the 12-byte header.
+    #[error("{}: {len} bytes is too short for a MERL file (needs a 12-byte header of three int32 dims)", path.display())]
+    TooShort {
+        /// The file.
+        path: PathBuf,
+        /// Its length in bytes.
+        len: u64,
+    },
+    /// The header's dimensions are zero, negative or absurdly large.
+    #[error("{}: header says {a}x{b}x{c}, expected three positive dims of at most {max} (MERL uses 90x90x180)", path.display())]
+    BadDims {
+        /// The file.
+        path: PathBuf,
+        /// n_theta_h as read.
+        a: i32,
+        /// n_theta_d as read.
+        b: i32,
+        /// n_phi_d as read.
+        c: i32,
+        /// The largest dimension accepted.
+        max: i32,
+    },
+    /// The file length disagrees with the dims in its header.
+    #[error("{}: header says {dims} (needs {expected} bytes) but the file has {actual} bytes", path.display())]
+    SizeMismatch {
+        /// The file.
+        path: PathBuf,
+        /// The dims, formatted `AxBxC`.
+        dims: String,
+        /// 12 + 3 * 8 * bins.
+        expected: u64,
+        /// The real length.
+        actual: u64,
+    },
+    /// A value is NaN or infinite.
+    #[error("{}: value {index} ({channel} channel, bin {bin}) is {value}, expected a finite number", path.display())]
+    NonFinite {
+        /// The file.
+        path: PathBuf,
+        /// Flat index of the value (channel-major).
+        index: usize,
+        /// "red", "green" or "blue".
+        channel: &'static str,
+        /// Bin inside the channel block.
+        bin: usize,
+        /// The offending value.
+        value: f64,
+    },
+    /// A table was built from a buffer whose length disagrees with its dims.
+    #[error("{what}: {actual} values given, {dims} needs {expected}")]
+    BufferLength {
+        /// What was being built.
+        what: String,
+        /// The dims, formatted `AxBxC`.
+        dims: String,
+        /// 3 * bins.
+        expected: usize,
+        /// The buffer's length.
+        actual: usize,
+    },
+    /// Dims given by a caller (not read from a file) are unusable.
+    #[error("dims {a}x{b}x{c}: {why}")]
+    InvalidDims {
+        /// n_theta_h.
+        a: usize,
+        /// n_theta_d.
+        b: usize,
+        /// n_phi_d.
+        c: usize,
+        /// What is wrong.
+        why: &'static str,
+    },
+}
+
+impl MerlError {
+    pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        MerlError::Io { path: path.into(), source }
+    }
+}
+
+/// Result with [`MerlError`].
+pub type Result<T, E = MerlError> = std::result::Result<T, E>;
