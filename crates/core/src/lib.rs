@@ -1,1 +1,29 @@
-//! GPLVM core
+//! GPLVM latent spaces of measured BRDFs (Soler, Subr, Nowrouzezahrai 2018).
+//!
+//! The pipeline: a directory of MERL files becomes a [`store::Store`] (the
+//! transformed, centred data `Z`, bin-major, memory-mapped) and its Gram
+//! matrix `Y = Z Z^T` in one streaming pass; [`GplvmParams`] fits latent
+//! points to `Y` with Hooke-Jeeves ([`optim::HookeJeeves`], O(N^2) per trial
+//! through [`incremental::IncrementalCost`]) or L-BFGS; a [`model::Model`]
+//! file records the result beside its store.
+#![warn(missing_docs)]
+
+pub mod error;
+pub mod gplvm;
+pub mod incremental;
+pub mod kernel;
+pub mod likelihood;
+pub mod model;
+pub mod optim;
+pub mod pca;
+pub mod store;
+pub mod transform;
+
+pub use error::{CoreError, NoProgress, Progress, Result};
+pub use gplvm::{CheckedParams, Fit, GplvmParams};
+pub use kernel::Kernel;
+pub use likelihood::GramData;
+pub use model::Model;
+pub use optim::OptimizerKind;
+pub use store::{Precision, Store};
+pub use transform::TransformKind;

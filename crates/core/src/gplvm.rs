@@ -1,0 +1,375 @@
+//! Parameters, checked parameters and the fit of a GPLVM.
+//!
+//! ```
+//! use brdf_atlas_core::{GplvmParams, GramData};
+//! use faer::Mat;
+//! // Four materials of dimension 3 on a line: Y = Z Z^T.
+//! let z = Mat::<f64>::from_fn(4, 3, |i, j| (i as f64 - 1.5) * (j as f64 + 1.0));
+//! let data = GramData::new(&z * z.transpose(), 3).unwrap();
+//! let fit = GplvmParams::new(1).length_scale(1.0).noise(1e-4).check().unwrap()
+//!     .fit(&data, &brdf_atlas_core::NoProgress).unwrap();
+//! assert!(fit.outcome.cost <= fit.outcome.initial_cost);
+//! ```
+
+use faer::Mat;
+
+use crate::error::{CoreError, Progress, Result};
+use crate::kernel::Kernel;
+use crate::likelihood::GramData;
+use crate::optim::{HookeJeeves, Lbfgs, Optimizer, OptimizerKind, Outcome, Problem};
+use crate::pca::dual_pca;
+
+/// GPLVM settings; `Default` gives the seed's (q = 2, l = 1, mu = 1e-4, Hooke-Jeeves).
+#[derive(Debug, Clone, PartialEq)]
+pub struct GplvmParams {
+    q: usize,
+    kernel: Kernel,
+    optimizer: OptimizerKind,
+    hooke_jeeves: HookeJeeves,
+    lbfgs: Lbfgs,
+}
+
+impl Default for GplvmParams {
+    fn default() -> Self {
+        GplvmParams::new(2)
+    }
+}
+
+impl GplvmParams {
+    /// Defaults with latent dimension `q`.
+    pub fn new(q: usize) -> Self {
+        GplvmParams {
+            q,
+            kernel: Kernel::default(),
+            optimizer: OptimizerKind::HookeJeeves,
+            hooke_jeeves: HookeJeeves::default(),
+            lbfgs: Lbfgs::default(),
+        }
+    }
+
+    /// Latent dimension.
+    pub fn q(mut self, q: usize) -> Self {
+        self.q = q;
+        self
+    }
+
+    /// RBF length scale `l`.
+    pub fn length_scale(mut self, l: f64) -> Self {
+        self.kernel.length_scale = l;
+        self
+    }
+
+    /// Noise `mu` on the kernel diagonal.
+    pub fn noise(mut self, mu: f64) -> Self {
+        self.kernel.noise = mu;
+        self
+    }
+
+    /// Which optimiser fits the latent points.
+    pub fn optimizer(mut self, kind: OptimizerKind) -> Self {
+        self.optimizer = kind;
+        self
+    }
+
+    /// Hooke-Jeeves' stopping step.
+    pub fn min_step(mut self, step: f64) -> Self {
+        self.hooke_jeeves.min_step = step;
+        self
+    }
+
+    /// Hooke-Jeeves' first step.
+    pub fn initial_step(mut self, step: f64) -> Self {
+        self.hooke_jeeves.initial_step = step;
+        self
+    }
+
+    /// Hooke-Jeeves' refactorisation interval (accepted moves).
+    pub fn refresh_every(mut self, moves: u64) -> Self {
+        self.hooke_jeeves.refresh_every = moves;
+        self
+    }
+
+    /// Check the values; only checked parameters can fit.
+    pub fn check(self) -> Result<CheckedParams> {
+        let bad = |m: String| Err(CoreError::InvalidParams(m));
+        let k = self.kernel;
+        if self.q == 0 || self.q > 16 {
+            return bad(format!("q = {} must be between 1 and 16", self.q));
+        }
+        if !(k.length_scale.is_finite() && k.length_scale > 0.0) {
+            return bad(format!(
+                "length scale {} must be positive and finite",
+                k.length_scale
+            ));
+        }
+        if !(k.noise.is_finite() && k.noise > 0.0) {
+            return bad(format!(
+                "noise {} must be positive and finite (it keeps K positive definite)",
+                k.noise
+            ));
+        }
+        let hj = self.hooke_jeeves;
+        if !(hj.min_step > 0.0 && hj.initial_step >= hj.min_step && hj.initial_step <= 2.0) {
+            return bad(format!(
+                "steps must satisfy 0 < min step ({}) <= initial step ({}) <= 2",
+                hj.min_step, hj.initial_step
+            ));
+        }
+        if !(hj.reduction > 0.0 && hj.reduction < 1.0) {
+            return bad(format!(
+                "step reduction {} must lie in (0, 1)",
+                hj.reduction
+            ));
+        }
+        Ok(CheckedParams(self))
+    }
+}
+
+/// Parameters that passed [`GplvmParams::check`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct CheckedParams(GplvmParams);
+
+/// A fitted latent space.
+#[derive(Debug, Clone)]
+pub struct Fit {
+    /// The kernel used.
+    pub kernel: Kernel,
+    /// The optimiser used.
+    pub optimizer: OptimizerKind,
+    /// The PCA start, `N x q`.
+    pub start: Mat<f64>,
+    /// Eigenvalues of the normalised Gram matrix, descending.
+    pub eigenvalues: Vec<f64>,
+    /// The optimiser's result (final latent points and cost among it).
+    pub outcome: Outcome,
+}
+
+impl CheckedParams {
+    /// The parameters.
+    pub fn params(&self) -> &GplvmParams {
+        &self.0
+    }
+
+    /// Fit latent points to the data: dual-PCA start, then the optimiser.
+    pub fn fit(&self, data: &GramData, progress: &dyn Progress) -> Result<Fit> {
+        let p = &self.0;
+        let (start, eigenvalues) = dual_pca(data.y(), p.q)?;
+        let problem = Problem {
+            kernel: p.kernel,
+            data,
+        };
+        let optimizer: &dyn Optimizer = match p.optimizer {
+            OptimizerKind::HookeJeeves => &p.hooke_jeeves,
+            OptimizerKind::Lbfgs => &p.lbfgs,
+        };
+        let outcome = optimizer.minimize(&problem, start.clone(), progress)?;
+        Ok(Fit {
+            kernel: p.kernel,
+            optimizer: p.optimizer,
+            start,
+            eigenvalues,
+            outcome,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::error::NoProgress;
+    use crate::likelihood::cost;
+    use brdf_merl::synth::SplitMix64;
+
+    /// Materials along a curve in a 30-dimensional space, plus noise.
+    fn curve(n: usize, seed: u64) -> GramData {
+        let mut rng = SplitMix64::new(seed);
+        let d = 30;
+        let dirs: Vec<f64> = (0..3 * d).map(|_| rng.range(-1.0, 1.0)).collect();
+        let mut z = Mat::<f64>::from_fn(n, d, |i, j| {
+            let t = i as f64 / n as f64 * 3.0;
+            t.sin() * dirs[j]
+                + t.cos() * dirs[d + j]
+                + 0.3 * t * dirs[2 * d + j]
+                + 0.01 * rng.range(-1.0, 1.0)
+        });
+        for j in 0..d {
+            let m: f64 = (0..n).map(|i| z[(i, j)]).sum::<f64>() / n as f64;
+            (0..n).for_each(|i| z[(i, j)] -= m);
+        }
+        GramData::new(&z * z.transpose(), d).unwrap()
+    }
+
+    fn check_box_and_monotone(data: &GramData, kernel: &Kernel, o: &Outcome) {
+        assert!(o.latent.as_ref().norm_max() <= 1.0 && o.latent.as_ref().norm_max().is_finite());
+        for w in o.history.windows(2) {
+            assert!(
+                w[1] <= w[0] + 1e-9 * w[0].abs(),
+                "cost rose: {} -> {}",
+                w[0],
+                w[1]
+            );
+        }
+        let dense = cost(kernel, data, o.latent.as_ref()).unwrap();
+        assert!((dense - o.cost).abs() <= 1e-9 * dense.abs());
+        assert!(o.cost <= o.initial_cost);
+    }
+
+    #[test]
+    fn hooke_jeeves_descends_inside_the_box_and_takes_pattern_moves() {
+        let data = curve(25, 3);
+        let fit = GplvmParams::new(2)
+            .check()
+            .unwrap()
+            .fit(&data, &NoProgress)
+            .unwrap();
+        check_box_and_monotone(&data, &fit.kernel, &fit.outcome);
+        assert!(fit.outcome.cost < fit.outcome.initial_cost);
+        assert!(
+            fit.outcome.drift.max_cost_drift < 1e-9,
+            "{:?}",
+            fit.outcome.drift
+        );
+        // From a start squeezed towards the origin, the search must expand the
+        // configuration: consistent directions that pattern moves accelerate.
+        let squeezed = &fit.start * faer::Scale(0.02);
+        let problem = Problem {
+            kernel: fit.kernel,
+            data: &data,
+        };
+        let o = HookeJeeves::default()
+            .minimize(&problem, squeezed, &NoProgress)
+            .unwrap();
+        check_box_and_monotone(&data, &fit.kernel, &o);
+        assert!(o.pattern_moves > 0, "no pattern move taken: {o:?}");
+    }
+
+    #[test]
+    fn lbfgs_descends_and_reaches_a_comparable_cost() {
+        let data = curve(25, 3);
+        let hj = GplvmParams::new(2)
+            .check()
+            .unwrap()
+            .fit(&data, &NoProgress)
+            .unwrap();
+        let lb = GplvmParams::new(2)
+            .optimizer(OptimizerKind::Lbfgs)
+            .check()
+            .unwrap()
+            .fit(&data, &NoProgress)
+            .unwrap();
+        check_box_and_monotone(&data, &lb.kernel, &lb.outcome);
+        assert!(lb.outcome.cost < lb.outcome.initial_cost);
+        // Both are local searches from one start; the gradient method should
+        // get at least most of the way that direct search does.
+        let gain = hj.outcome.initial_cost - hj.outcome.cost;
+        assert!(
+            lb.outcome.cost < hj.outcome.cost + 0.2 * gain,
+            "hj {} lbfgs {}",
+            hj.outcome.cost,
+            lb.outcome.cost
+        );
+    }
+
+    #[test]
+    fn hard_cases_stay_finite_and_inside() {
+        let kernel_cases = [1e-4, 1e-10];
+        // Two identical materials among others; all identical; N = 2.
+        let mut rng = SplitMix64::new(8);
+        let d = 20;
+        let base: Vec<f64> = (0..d).map(|_| rng.range(-1.0, 1.0)).collect();
+        let mut twins = Mat::<f64>::from_fn(6, d, |_, _| rng.range(-1.0, 1.0));
+        for j in 0..d {
+            twins[(0, j)] = base[j];
+            twins[(1, j)] = base[j];
+        }
+        let same = Mat::<f64>::from_fn(5, d, |_, j| base[j]);
+        let pair = Mat::<f64>::from_fn(2, d, |i, j| if i == 0 { base[j] } else { -base[j] });
+        // A chrome-like material with values near 1e4 beside dark ones.
+        let chrome = Mat::<f64>::from_fn(5, d, |i, j| {
+            if i == 0 {
+                1e4 * (j % 3) as f64
+            } else {
+                1e-3 * rng.range(0.0, 1.0)
+            }
+        });
+        for (name, z, q) in [
+            ("twins", twins, 2),
+            ("same", same, 2),
+            ("pair", pair, 1),
+            ("chrome", chrome, 2),
+        ] {
+            let mut z = z;
+            for j in 0..d {
+                let m: f64 = (0..z.nrows()).map(|i| z[(i, j)]).sum::<f64>() / z.nrows() as f64;
+                (0..z.nrows()).for_each(|i| z[(i, j)] -= m);
+            }
+            let data = GramData::new(&z * z.transpose(), d).unwrap();
+            for &noise in &kernel_cases {
+                for kind in [OptimizerKind::HookeJeeves, OptimizerKind::Lbfgs] {
+                    let fit = GplvmParams::new(q)
+                        .noise(noise)
+                        .optimizer(kind)
+                        .check()
+                        .unwrap()
+                        .fit(&data, &NoProgress);
+                    let fit = fit.unwrap_or_else(|e| panic!("{name} mu={noise} {kind:?}: {e}"));
+                    let o = &fit.outcome;
+                    assert!(o.cost.is_finite(), "{name} {noise} {kind:?}");
+                    assert!(
+                        o.latent.as_ref().norm_max() <= 1.0,
+                        "{name} {noise} {kind:?}"
+                    );
+                    let k = fit.kernel.matrix(o.latent.as_ref());
+                    assert!(
+                        k.llt(faer::Side::Lower).is_ok(),
+                        "{name} {noise}: K not SPD"
+                    );
+                }
+            }
+        }
+        // N = 1, or q >= N: a clear error, not a NaN.
+        let one = GramData::new(Mat::from_fn(1, 1, |_, _| 1.0), 3).unwrap();
+        let e = GplvmParams::new(1)
+            .check()
+            .unwrap()
+            .fit(&one, &NoProgress)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("q = 1") && e.contains("N = 1"), "{e}");
+    }
+
+    #[test]
+    fn parameters_are_checked() {
+        assert!(GplvmParams::new(2).noise(0.0).check().is_err());
+        assert!(GplvmParams::new(2).length_scale(f64::NAN).check().is_err());
+        assert!(GplvmParams::new(0).check().is_err());
+        assert!(
+            GplvmParams::new(2)
+                .min_step(1.0)
+                .initial_step(0.5)
+                .check()
+                .is_err()
+        );
+    }
+
+    #[test]
+    fn same_model_for_one_and_two_threads() {
+        let data = curve(20, 5);
+        let run = |threads| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| {
+                    GplvmParams::new(2)
+                        .check()
+                        .unwrap()
+                        .fit(&data, &NoProgress)
+                        .unwrap()
+                        .outcome
+                        .latent
+                })
+        };
+        assert_eq!(run(1), run(2));
+    }
+}

@@ -1,0 +1,57 @@
+//! The RBF kernel `c(x, x') = exp(-|x - x'|^2 / (2 l^2)) + mu delta(x, x')`.
+
+use faer::{Mat, MatRef};
+use serde::{Deserialize, Serialize};
+
+/// Kernel hyperparameters: length scale `l` and noise `mu` (the seed's defaults are 1 and 1e-4).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Kernel {
+    /// Length scale `l` of the RBF.
+    pub length_scale: f64,
+    /// Noise `mu`, added on the diagonal only.
+    pub noise: f64,
+}
+
+impl Default for Kernel {
+    fn default() -> Self {
+        Kernel {
+            length_scale: 1.0,
+            noise: 1e-4,
+        }
+    }
+}
+
+impl Kernel {
+    /// `exp(-|a - b|^2 / (2 l^2))`, without the noise term.
+    #[inline]
+    pub fn eval(&self, a: &[f64], b: &[f64]) -> f64 {
+        let r2: f64 = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum();
+        (-r2 / (2.0 * self.length_scale * self.length_scale)).exp()
+    }
+
+    /// The `N x N` matrix `K` of latent points `x` (`N x q`), noise on the diagonal.
+    pub fn matrix(&self, x: MatRef<'_, f64>) -> Mat<f64> {
+        let n = x.nrows();
+        let pts = rows_of(x);
+        Mat::from_fn(n, n, |i, j| {
+            if i == j {
+                1.0 + self.noise
+            } else {
+                self.eval(&pts[i], &pts[j])
+            }
+        })
+    }
+
+    /// `k(p)_i = exp(-|p - x_i|^2 / (2 l^2))`: no noise term, so a training
+    /// point does not reproduce itself exactly.
+    pub fn vector(&self, x: MatRef<'_, f64>, p: &[f64]) -> Vec<f64> {
+        rows_of(x).iter().map(|xi| self.eval(xi, p)).collect()
+    }
+}
+
+/// The rows of a small matrix as vectors.
+pub(crate) fn rows_of(x: MatRef<'_, f64>) -> Vec<Vec<f64>> {
+    (0..x.nrows())
+        .map(|i| (0..x.ncols()).map(|j| x[(i, j)]).collect())
+        .collect()
+}

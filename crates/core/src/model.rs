@@ -1,0 +1,470 @@
+//! The model file: a fitted latent space beside its store.
+//!
+//! A model is two files: `NAME` (JSON, small, self-describing, versioned)
+//! and `NAME.store` (the data, see [`crate::store`]). The JSON names the
+//! store relative to itself and records its size and checksum, so a moved
+//! pair still opens and a changed store is refused. Both are written
+//! atomically.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use brdf_merl::Dims;
+use brdf_merl::atomic::write_atomic;
+use faer::linalg::solvers::Solve;
+use faer::{Mat, Side};
+use serde::{Deserialize, Serialize};
+
+use crate::error::{CoreError, Progress, Result};
+use crate::gplvm::{CheckedParams, Fit};
+use crate::incremental::DriftStats;
+use crate::kernel::Kernel;
+use crate::likelihood::GramData;
+use crate::optim::OptimizerKind;
+use crate::store::{Dataset, Precision, Store, build_store};
+use crate::transform::TransformKind;
+
+/// The `format` field of every model file.
+pub const FORMAT: &str = "brdf-atlas-model";
+/// The model format version this build writes and reads.
+pub const VERSION: u32 = 1;
+
+/// Where the store is and how to recognise it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StoreRef {
+    /// Path of the store, relative to the model file's directory.
+    pub path: String,
+    /// Its size in bytes.
+    pub bytes: u64,
+    /// Its checksum ([`Store::checksum`]), hex.
+    pub checksum: String,
+}
+
+/// What the optimiser did, for the record.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FitRecord {
+    /// Optimiser used.
+    pub optimizer: OptimizerKind,
+    /// Cost at the PCA start.
+    pub initial_cost: f64,
+    /// Final cost `d/2 log|K| + 1/2 tr(K^-1 Y)` (normalised `Y`).
+    pub cost: f64,
+    /// Optimiser iterations.
+    pub iterations: u64,
+    /// Cost evaluations.
+    pub evaluations: u64,
+    /// Accepted pattern moves.
+    pub pattern_moves: u64,
+    /// Incremental-update health.
+    pub drift: DriftStats,
+    /// Eigenvalues of the normalised Gram matrix, descending.
+    pub eigenvalues: Vec<f64>,
+}
+
+/// The JSON content of a model file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ModelFile {
+    /// Always [`FORMAT`].
+    pub format: String,
+    /// Format version ([`VERSION`]).
+    pub version: u32,
+    /// Material names, in store column order.
+    pub names: Vec<String>,
+    /// Latent points, one `q`-vector per material.
+    pub latent: Vec<Vec<f64>>,
+    /// Kernel hyperparameters.
+    pub kernel: Kernel,
+    /// Data transform of the store.
+    pub transform: TransformKind,
+    /// Store precision.
+    pub precision: Precision,
+    /// Table dims `[theta_h, theta_d, phi_d]`.
+    pub dims: [usize; 3],
+    /// Dimension `d` of each material (3 * bins).
+    pub d: usize,
+    /// The variance the Gram matrix was normalised by before fitting.
+    pub signal_variance: f64,
+    /// The fit.
+    pub fit: FitRecord,
+    /// The store.
+    pub store: StoreRef,
+}
+
+/// An opened model: the file, its store mapped, `K` factorised.
+pub struct Model {
+    path: PathBuf,
+    file: ModelFile,
+    store: Store,
+    latent: Mat<f64>,
+    llt: faer::linalg::solvers::Llt<f64>,
+}
+
+impl std::fmt::Debug for Model {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Model")
+            .field("path", &self.path)
+            .field("n", &self.file.names.len())
+            .finish()
+    }
+}
+
+/// The store file that goes with a model path: `NAME.store`.
+pub fn store_path_for(model: &Path) -> PathBuf {
+    let mut s = model.as_os_str().to_os_string();
+    s.push(".store");
+    PathBuf::from(s)
+}
+
+impl Model {
+    /// Open a model file and its store; check format, version, shapes, the
+    /// store's size and checksum, and factorise `K`.
+    pub fn open(path: impl AsRef<Path>) -> Result<Model> {
+        let path = path.as_ref().to_path_buf();
+        let text = std::fs::read(&path).map_err(|e| CoreError::io(&path, e))?;
+        let bad = |why: String| CoreError::bad_file(&path, why);
+        let value: serde_json::Value = serde_json::from_slice(&text)
+            .map_err(|e| bad(format!("not a brdf-atlas model (invalid JSON: {e})")))?;
+        if value.get("format").and_then(|v| v.as_str()) != Some(FORMAT) {
+            return Err(bad(format!(
+                "not a brdf-atlas model (expected \"format\": \"{FORMAT}\")"
+            )));
+        }
+        match value.get("version").and_then(|v| v.as_u64()) {
+            Some(v) if v == VERSION as u64 => {}
+            Some(v) if v > VERSION as u64 => {
+                return Err(bad(format!(
+                    "model format version {v} is newer than this build reads ({VERSION}); upgrade brdf-atlas"
+                )));
+            }
+            Some(v) => {
+                return Err(bad(format!(
+                    "model format version {v}, this build reads version {VERSION}"
+                )));
+            }
+            None => return Err(bad("model has no version number".into())),
+        }
+        let file: ModelFile =
+            serde_json::from_value(value).map_err(|e| bad(format!("malformed model: {e}")))?;
+        let n = file.names.len();
+        let q = file.latent.first().map_or(0, |p| p.len());
+        if n == 0 || file.latent.len() != n {
+            return Err(bad(format!(
+                "{} names but {} latent points",
+                n,
+                file.latent.len()
+            )));
+        }
+        if q == 0
+            || file
+                .latent
+                .iter()
+                .any(|p| p.len() != q || p.iter().any(|v| !v.is_finite()))
+        {
+            return Err(bad(
+                "latent points must all have the same dimension and finite coordinates".into(),
+            ));
+        }
+        let kernel = file.kernel;
+        if !(kernel.length_scale > 0.0
+            && kernel.length_scale.is_finite()
+            && kernel.noise > 0.0
+            && kernel.noise.is_finite())
+        {
+            return Err(bad(format!(
+                "kernel {kernel:?} needs positive finite length scale and noise"
+            )));
+        }
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let store_path = dir.join(&file.store.path);
+        let store = Store::open(&store_path)?;
+        let sbad = |why: String| CoreError::bad_file(&store_path, why);
+        if store.len_bytes() != file.store.bytes {
+            return Err(sbad(format!(
+                "{} bytes, the model {} expects {} (the store was changed or replaced)",
+                store.len_bytes(),
+                path.display(),
+                file.store.bytes
+            )));
+        }
+        let dims = store.dims();
+        if store.n() != n
+            || [dims.theta_h, dims.theta_d, dims.phi_d] != file.dims
+            || store.transform() != file.transform
+        {
+            return Err(sbad(format!(
+                "holds {} materials of {dims} ({}), the model expects {n} of {:?} ({})",
+                store.n(),
+                store.transform().name(),
+                file.dims,
+                file.transform.name()
+            )));
+        }
+        let checksum = format!("{:016x}", store.checksum());
+        if checksum != file.store.checksum {
+            return Err(sbad(format!(
+                "checksum {checksum} differs from {} recorded in {} (the store was changed)",
+                file.store.checksum,
+                path.display()
+            )));
+        }
+        let latent = Mat::from_fn(n, q, |i, c| file.latent[i][c]);
+        let llt = kernel
+            .matrix(latent.as_ref())
+            .llt(Side::Lower)
+            .map_err(|_| CoreError::NotPositiveDefinite {
+                context: format!("opening {}", path.display()),
+            })?;
+        Ok(Model {
+            path,
+            file,
+            store,
+            latent,
+            llt,
+        })
+    }
+
+    /// Write the model file atomically (the store must already be in place).
+    pub fn write_file(path: &Path, file: &ModelFile) -> Result<()> {
+        let json = serde_json::to_vec_pretty(file)
+            .map_err(|e| CoreError::bad_file(path, e.to_string()))?;
+        write_atomic(path, |w| std::io::Write::write_all(w, &json))
+            .map_err(|e| CoreError::io(path, e))
+    }
+
+    /// The model file's path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The model file's content.
+    pub fn file(&self) -> &ModelFile {
+        &self.file
+    }
+
+    /// The mapped store.
+    pub fn store(&self) -> &Store {
+        &self.store
+    }
+
+    /// Material names in order.
+    pub fn names(&self) -> &[String] {
+        &self.file.names
+    }
+
+    /// Latent points, `N x q`.
+    pub fn latent(&self) -> &Mat<f64> {
+        &self.latent
+    }
+
+    /// Latent dimension `q`.
+    pub fn q(&self) -> usize {
+        self.latent.ncols()
+    }
+
+    /// Table dims.
+    pub fn dims(&self) -> Dims {
+        self.store.dims()
+    }
+
+    /// The blend weights `w(x) = K^-1 k(x)` at a latent point.
+    pub fn weights_at(&self, x: &[f64]) -> Result<Vec<f64>> {
+        if x.len() != self.q() || x.iter().any(|v| !v.is_finite()) {
+            return Err(CoreError::BadQuery(format!(
+                "latent point {x:?}: expected {} finite coordinates",
+                self.q()
+            )));
+        }
+        let k = self.file.kernel.vector(self.latent.as_ref(), x);
+        let col = faer::Col::from_fn(k.len(), |i| k[i]);
+        let w = self.llt.solve(&col);
+        Ok((0..w.nrows()).map(|i| w[i]).collect())
+    }
+}
+
+/// Settings of a whole fit from a directory of MERL files.
+#[derive(Debug, Clone)]
+pub struct FitOptions {
+    /// GPLVM parameters.
+    pub params: CheckedParams,
+    /// Data transform.
+    pub transform: TransformKind,
+    /// Store precision.
+    pub precision: Precision,
+}
+
+/// What a fit did and how long each phase took.
+#[derive(Debug)]
+pub struct FitReport {
+    /// The opened data set (materials, ignored entries).
+    pub names: Vec<String>,
+    /// Entries of the directory that were not used.
+    pub ignored: Vec<(PathBuf, String)>,
+    /// The fit.
+    pub fit: Fit,
+    /// The model file written.
+    pub model_path: PathBuf,
+    /// The store written.
+    pub store_path: PathBuf,
+    /// Opening and validating the MERL files.
+    pub scan_time: Duration,
+    /// The one pass building the store and the Gram matrix.
+    pub store_time: Duration,
+    /// The optimisation.
+    pub optimise_time: Duration,
+    /// Writing the model and checksumming the store.
+    pub save_time: Duration,
+}
+
+/// Fit a directory of MERL files and write `model` and `model.store`.
+pub fn fit_dir(
+    dir: &Path,
+    model: &Path,
+    options: &FitOptions,
+    progress: &dyn Progress,
+) -> Result<FitReport> {
+    let t0 = Instant::now();
+    let data = Dataset::open_dir(dir)?;
+    let scan_time = t0.elapsed();
+    let t1 = Instant::now();
+    let store_path = store_path_for(model);
+    let (store, y) = build_store(
+        &data,
+        options.transform,
+        options.precision,
+        &store_path,
+        progress,
+    )?;
+    let store_time = t1.elapsed();
+    let t2 = Instant::now();
+    let gram = GramData::new(y, store.rows())?;
+    let fit = options.params.fit(&gram, progress)?;
+    let optimise_time = t2.elapsed();
+    let t3 = Instant::now();
+    let dims = store.dims();
+    let o = &fit.outcome;
+    let file = ModelFile {
+        format: FORMAT.into(),
+        version: VERSION,
+        names: data.names.clone(),
+        latent: (0..o.latent.nrows())
+            .map(|i| (0..o.latent.ncols()).map(|c| o.latent[(i, c)]).collect())
+            .collect(),
+        kernel: fit.kernel,
+        transform: options.transform,
+        precision: options.precision,
+        dims: [dims.theta_h, dims.theta_d, dims.phi_d],
+        d: store.rows(),
+        signal_variance: gram.scale2(),
+        fit: FitRecord {
+            optimizer: fit.optimizer,
+            initial_cost: o.initial_cost,
+            cost: o.cost,
+            iterations: o.iterations,
+            evaluations: o.evaluations,
+            pattern_moves: o.pattern_moves,
+            drift: o.drift,
+            eigenvalues: fit.eigenvalues.clone(),
+        },
+        store: StoreRef {
+            path: store_path
+                .file_name()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            bytes: store.len_bytes(),
+            checksum: format!("{:016x}", store.checksum()),
+        },
+    };
+    Model::write_file(model, &file)?;
+    let save_time = t3.elapsed();
+    Ok(FitReport {
+        names: data.names,
+        ignored: data.ignored,
+        fit,
+        model_path: model.to_path_buf(),
+        store_path,
+        scan_time,
+        store_time,
+        optimise_time,
+        save_time,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::error::NoProgress;
+    use crate::gplvm::GplvmParams;
+
+    fn fitted(dir: &Path) -> PathBuf {
+        let dims = Dims::new(6, 6, 12).unwrap();
+        for m in brdf_merl::synth::database(6, 2) {
+            m.brdf
+                .table(dims)
+                .write(dir.join(format!("{}.binary", m.name)))
+                .unwrap();
+        }
+        let model = dir.join("m.atlas");
+        let options = FitOptions {
+            params: GplvmParams::new(2).check().unwrap(),
+            transform: TransformKind::Log,
+            precision: Precision::F32,
+        };
+        fit_dir(dir, &model, &options, &NoProgress).unwrap();
+        model
+    }
+
+    #[test]
+    fn model_round_trips_and_answers() {
+        let tmp = tempfile::tempdir().unwrap();
+        let path = fitted(tmp.path());
+        let m = Model::open(&path).unwrap();
+        assert_eq!(m.names().len(), 6);
+        // Re-serialising the loaded content gives the same file.
+        let again = tmp.path().join("again.atlas");
+        Model::write_file(&again, m.file()).unwrap();
+        assert_eq!(
+            std::fs::read(&path).unwrap(),
+            std::fs::read(&again).unwrap()
+        );
+        // Weights reproduce K^-1 k(x): at a training point, K w = k(x_i).
+        let xi: Vec<f64> = (0..2).map(|c| m.latent()[(3, c)]).collect();
+        let w = m.weights_at(&xi).unwrap();
+        let k = m.file().kernel.matrix(m.latent().as_ref());
+        let kx = m.file().kernel.vector(m.latent().as_ref(), &xi);
+        for r in 0..6 {
+            let kw: f64 = (0..6).map(|c| k[(r, c)] * w[c]).sum();
+            assert!((kw - kx[r]).abs() < 1e-9);
+        }
+        assert!(m.weights_at(&[f64::NAN, 0.0]).is_err());
+        assert!(m.weights_at(&[0.0]).is_err());
+    }
+
+    #[test]
+    fn changed_missing_or_newer_models_are_refused() {
+        let tmp = tempfile::tempdir().unwrap();
+        let path = fitted(tmp.path());
+        let text = std::fs::read_to_string(&path).unwrap();
+        let bad = tmp.path().join("bad.atlas");
+        let check = |content: &str, want: &str| {
+            std::fs::write(&bad, content).unwrap();
+            let e = Model::open(&bad).unwrap_err().to_string();
+            assert!(e.contains(want), "{want}: {e}");
+            assert!(e.contains("bad.atlas") || e.contains(".store"), "{e}");
+        };
+        check(
+            &text.replace("\"version\": 1", "\"version\": 7"),
+            "newer than this build",
+        );
+        check(&text[..text.len() / 2], "invalid JSON");
+        check("{}", "not a brdf-atlas model");
+        check(&text.replace("m.atlas.store", "gone.store"), "gone.store");
+        // A store changed in one byte.
+        let store = store_path_for(&path);
+        let mut bytes = std::fs::read(&store).unwrap();
+        let last = bytes.len() - 1;
+        bytes[last] ^= 1;
+        std::fs::write(&store, &bytes).unwrap();
+        let e = Model::open(&path).unwrap_err().to_string();
+        assert!(e.contains("checksum") && e.contains("m.atlas.store"), "{e}");
+    }
+}

@@ -1,0 +1,140 @@
+//! Data transforms: the space in which the GPLVM sees the BRDF values.
+//!
+//! A transform maps each measured reflectance value (per channel and bin) to
+//! the number that enters `Z`, and back. `raw` is the seed's choice (the
+//! values themselves); `log` is the cosine-weighted log of Sztrajman et al.
+//! 2021, `log(1 + f cos(theta_i) cos(theta_o))`, which compresses the
+//! dynamic range (1e-3 .. 1e4) so that highlights do not dominate the fit.
+
+use brdf_merl::Dims;
+use serde::{Deserialize, Serialize};
+
+/// Which transform a store and model use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum TransformKind {
+    /// The reflectance itself (1/sr); unmeasured samples read as 0.
+    #[default]
+    Raw,
+    /// `log(1 + f cos_i cos_o)`; unmeasured samples read as 0.
+    Log,
+}
+
+impl TransformKind {
+    /// The name used on the command line and in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            TransformKind::Raw => "raw",
+            TransformKind::Log => "log",
+        }
+    }
+
+    /// Parse `raw` or `log`.
+    pub fn parse(s: &str) -> Option<TransformKind> {
+        match s {
+            "raw" => Some(TransformKind::Raw),
+            "log" => Some(TransformKind::Log),
+            _ => None,
+        }
+    }
+
+    /// Build the transform for tables of these dims.
+    pub fn build(self, dims: Dims) -> Box<dyn Transform> {
+        match self {
+            TransformKind::Raw => Box::new(Raw),
+            TransformKind::Log => Box::new(CosineLog::new(dims)),
+        }
+    }
+
+    /// Is the transform linear (so that albedo can be blended from weights)?
+    pub fn is_linear(self) -> bool {
+        matches!(self, TransformKind::Raw)
+    }
+}
+
+/// A per-value transform of reflectance. `bin` is the bin inside a channel.
+pub trait Transform: Send + Sync {
+    /// Reflectance (or `None` where not measured) -> latent-space value.
+    fn forward(&self, bin: usize, value: Option<f64>) -> f64;
+    /// Latent-space value -> reflectance, clamped to `>= 0`.
+    fn inverse(&self, bin: usize, t: f64) -> f64;
+}
+
+/// The identity on reflectance.
+pub struct Raw;
+
+impl Transform for Raw {
+    #[inline]
+    fn forward(&self, _bin: usize, value: Option<f64>) -> f64 {
+        value.unwrap_or(0.0)
+    }
+    #[inline]
+    fn inverse(&self, _bin: usize, t: f64) -> f64 {
+        t.max(0.0)
+    }
+}
+
+/// `log(1 + f cos_i cos_o)` with the cosines of each bin's representative angles.
+pub struct CosineLog {
+    cos: Vec<f64>,
+}
+
+/// Below this cosine product a bin is treated as grazing: nothing is recovered there.
+const MIN_COS: f64 = 1e-6;
+
+impl CosineLog {
+    /// Precompute `cos_i cos_o` (clamped at 0) for every bin of `dims`.
+    pub fn new(dims: Dims) -> CosineLog {
+        let cos = (0..dims.bins())
+            .map(|b| {
+                let (ci, co) = dims.angles_of(b).cosines();
+                (ci * co).max(0.0)
+            })
+            .collect();
+        CosineLog { cos }
+    }
+}
+
+impl Transform for CosineLog {
+    #[inline]
+    fn forward(&self, bin: usize, value: Option<f64>) -> f64 {
+        value.map_or(0.0, |f| (f.max(0.0) * self.cos[bin]).ln_1p())
+    }
+    #[inline]
+    fn inverse(&self, bin: usize, t: f64) -> f64 {
+        let c = self.cos[bin];
+        if c < MIN_COS {
+            0.0
+        } else {
+            (t.exp_m1() / c).max(0.0)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn transforms_invert() {
+        let dims = Dims::new(10, 10, 20).unwrap();
+        for kind in [TransformKind::Raw, TransformKind::Log] {
+            let t = kind.build(dims);
+            for bin in [0, 37, 555, 1999] {
+                let (ci, co) = dims.angles_of(bin).cosines();
+                if ci * co < MIN_COS {
+                    continue;
+                }
+                for f in [0.0, 1e-3, 0.5, 12.0, 1e4] {
+                    let back = t.inverse(bin, t.forward(bin, Some(f)));
+                    assert!(
+                        (back - f).abs() <= 1e-12 * f.max(1.0),
+                        "{kind:?} bin {bin}: {f} -> {back}"
+                    );
+                }
+                assert_eq!(t.forward(bin, None), 0.0);
+                assert_eq!(t.inverse(bin, -5.0), 0.0);
+            }
+        }
+    }
+}
