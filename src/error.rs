@@ -1,0 +1,39 @@
+//! The command-line tool's error type: every failure is one line naming
+//! what failed (a file, a directory) and what was expected.
+
+use std::path::PathBuf;
+
+use brdf_merl::MerlError;
+
+/// Everything a command can fail with.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// Reading, validating or writing a MERL file failed.
+    #[error(transparent)]
+    Merl(#[from] MerlError),
+    /// A path given as a MERL file is a directory.
+    #[error("{}: is a directory, expected a MERL .binary file", path.display())]
+    IsDirectory {
+        /// The directory.
+        path: PathBuf,
+    },
+    /// Creating an output directory failed.
+    #[error("{}: cannot create directory: {source}", path.display())]
+    CreateDir {
+        /// The directory.
+        path: PathBuf,
+        /// What the OS said.
+        source: std::io::Error,
+    },
+    /// Writing the report to stdout failed.
+    #[error("cannot write to stdout: {0}")]
+    Stdout(#[from] std::io::Error),
+}
+
+impl Error {
+    /// True when stdout was closed by its reader (`brdf-atlas info ... | head`),
+    /// which is not worth a message.
+    pub fn is_broken_pipe(&self) -> bool {
+        matches!(self, Error::Stdout(e) if e.kind() == std::io::ErrorKind::BrokenPipe)
+    }
+}

@@ -1,0 +1,324 @@
+//! End-to-end tests of the `brdf-atlas` binary on generated data.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::{brdf_atlas, reported, texts};
+
+/// The 12-byte header of dims `a x b x c`.
+fn header(a: i32, b: i32, c: i32) -> Vec<u8> {
+    [a, b, c].iter().flat_map(|d| d.to_le_bytes()).collect()
+}
+
+/// Bytes of a MERL file of dims `a x b x c` with every raw value `v`.
+fn merl_bytes(a: i32, b: i32, c: i32, v: f64) -> Vec<u8> {
+    let mut bytes = header(a, b, c);
+    let n = 3 * (a * b * c) as usize;
+    bytes.extend(std::iter::repeat_n(v.to_le_bytes(), n).flatten());
+    bytes
+}
+
+fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, bytes).unwrap();
+    path
+}
+
+fn binaries(dir: &Path) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "binary"))
+        .collect();
+    files.sort();
+    files
+}
+
+#[test]
+fn help_documents_every_subcommand() {
+    let out = brdf_atlas(["--help"]);
+    assert!(out.status.success());
+    let (stdout, _) = texts(&out);
+    for word in ["info", "synth", "demo", "MERL", "BRDF Explorer"] {
+        assert!(stdout.contains(word), "--help lacks {word}:\n{stdout}");
+    }
+    for sub in ["info", "synth", "demo"] {
+        let out = brdf_atlas([sub, "--help"]);
+        assert!(out.status.success(), "{sub} --help");
+        assert!(texts(&out).0.contains("Usage: brdf-atlas"), "{sub} --help");
+    }
+}
+
+#[test]
+fn no_arguments_is_a_usage_error() {
+    let out = brdf_atlas::<[&str; 0], &str>([]);
+    assert!(!out.status.success());
+    let out = brdf_atlas(["info"]);
+    assert!(!out.status.success());
+    assert!(texts(&out).1.starts_with("error:"), "{}", texts(&out).1);
+}
+
+#[test]
+fn synth_then_info_reports_dims_and_a_plausible_albedo() {
+    // 16x16x32, not smaller: a table samples each bin at its lower corner, so
+    // on a very coarse grid a sharp metal's specular peak fills whole bins and
+    // its albedo comes out above 1 (1.8 for a chrome at 8x8x16, seed 5).
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("db");
+    let out = brdf_atlas([
+        "synth",
+        "--dims",
+        "16,16,32",
+        "--count",
+        "3",
+        "--seed",
+        "5",
+        out_dir.to_str().unwrap(),
+    ]);
+    let (stdout, stderr) = texts(&out);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stdout.contains("wrote 3 materials (16x16x32"), "{stdout}");
+    let files = binaries(&out_dir);
+    assert_eq!(files.len(), 3);
+    for f in &files {
+        assert_eq!(
+            std::fs::metadata(f).unwrap().len(),
+            12 + 8 * 3 * 16 * 16 * 32
+        );
+    }
+
+    let out = brdf_atlas(std::iter::once(PathBuf::from("info")).chain(files.clone()));
+    let (stdout, stderr) = texts(&out);
+    assert!(out.status.success(), "{stderr}");
+    for f in &files {
+        let r = reported(&stdout, f);
+        assert_eq!(r.dims, "16x16x32");
+        // Below-horizon bins are marked unmeasured, the same in every channel.
+        assert!(r.invalid[0] > 0 && r.invalid == [r.invalid[0]; 3], "{r:?}");
+        for a in r.albedo {
+            assert!(a > 0.0 && a < 1.5, "{}: albedo {a}", f.display());
+        }
+    }
+    // Small dims are fine, but not for BRDF Explorer: one warning, no error.
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 1, "{stderr}");
+    assert!(
+        lines[0].starts_with("warning:") && lines[0].contains("BRDF Explorer needs 90x90x180"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn synth_is_deterministic_in_its_seed() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |name: &str, seed: &str| {
+        let d = dir.path().join(name);
+        let out = brdf_atlas([
+            "synth",
+            "--dims",
+            "4,4,8",
+            "--count",
+            "2",
+            "--seed",
+            seed,
+            d.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", texts(&out).1);
+        binaries(&d)
+            .iter()
+            .map(|p| std::fs::read(p).unwrap())
+            .collect::<Vec<_>>()
+    };
+    let a = run("a", "7");
+    assert_eq!(a, run("b", "7"));
+    assert_ne!(a, run("c", "8"));
+}
+
+#[test]
+fn synth_rejects_bad_dims_clearly() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("never");
+    for bad in [
+        "8,8", "8,8,16,2", "a,b,c", "0,8,16", "-8,8,16", "8,8,5000", "",
+    ] {
+        let out = brdf_atlas(["synth", "--dims", bad, out_dir.to_str().unwrap()]);
+        let (_, stderr) = texts(&out);
+        assert!(!out.status.success(), "--dims {bad:?} accepted");
+        let first = stderr.lines().next().unwrap_or_default();
+        assert!(first.starts_with("error:"), "{bad:?}: {stderr}");
+        assert!(
+            first.contains("--dims expects three positive integers like 90,90,180"),
+            "{bad:?}: {stderr}"
+        );
+        assert!(!out_dir.exists(), "nothing is written on bad input");
+    }
+}
+
+#[test]
+fn synth_into_a_file_fails_with_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = write(dir.path(), "occupied", b"x");
+    let out = brdf_atlas([
+        "synth",
+        "--dims",
+        "4,4,8",
+        "--count",
+        "1",
+        file.to_str().unwrap(),
+    ]);
+    let (_, stderr) = texts(&out);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.starts_with("error: ") && stderr.contains("occupied"),
+        "{stderr}"
+    );
+}
+
+/// Hostile inputs, each with a word its error must contain.
+fn hostile_files(dir: &Path) -> Vec<(PathBuf, &'static str)> {
+    let good = merl_bytes(4, 4, 8, 750.0);
+    let mut nan = good.clone();
+    let at = 12 + 8 * 200;
+    nan[at..at + 8].copy_from_slice(&f64::NAN.to_le_bytes());
+    let subdir = dir.join("a-directory.binary");
+    std::fs::create_dir(&subdir).unwrap();
+    vec![
+        (write(dir, "empty.binary", b""), "too short"),
+        (write(dir, "truncated.binary", &good[..good.len() - 100]), "bytes"),
+        (write(dir, "wrong-header.binary", &merl_bytes(90, 90, 180, 1.0)[..good.len()]), "header says 90x90x180"),
+        (write(dir, "negative-dims.binary", &header(-4, 4, 8)), "positive dims"),
+        (
+            write(dir, "lfs-pointer.binary", b"version https://git-lfs.github.com/spec/v1\noid sha256:4d7a214614ab2935c943f9e0ff69d22eadbb8f32b1258daaa5e2ca24d17e2393\nsize 34992012\n"),
+            "Git LFS pointer",
+        ),
+        (write(dir, "nan.binary", &nan), "NaN"),
+        (dir.join("does-not-exist.binary"), "No such file"),
+        (subdir, "is a directory"),
+    ]
+}
+
+#[test]
+fn each_hostile_file_fails_with_one_line_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    for (path, want) in hostile_files(dir.path()) {
+        let out = brdf_atlas([Path::new("info"), &path]);
+        let (stdout, stderr) = texts(&out);
+        let name = path.file_name().unwrap().to_str().unwrap();
+        assert_eq!(out.status.code(), Some(1), "{name}: {stderr}");
+        assert_eq!(
+            stderr.lines().count(),
+            1,
+            "{name}: one line, got:\n{stderr}"
+        );
+        assert!(stderr.starts_with("error: "), "{name}: {stderr}");
+        assert!(
+            stderr.contains(name),
+            "{name}: error must name the file: {stderr}"
+        );
+        assert!(
+            stderr.contains(want),
+            "{name}: expected {want:?} in {stderr}"
+        );
+        assert!(
+            stdout.is_empty(),
+            "{name}: no report for a bad file: {stdout}"
+        );
+    }
+}
+
+#[test]
+fn bad_files_do_not_stop_the_good_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let hostile = hostile_files(dir.path());
+    let good = write(dir.path(), "good.binary", &merl_bytes(4, 4, 8, 750.0));
+    let mut args = vec![PathBuf::from("info"), hostile[0].0.clone(), good.clone()];
+    args.extend(hostile[1..].iter().map(|(p, _)| p.clone()));
+    let out = brdf_atlas(&args);
+    let (stdout, stderr) = texts(&out);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    let r = reported(&stdout, &good);
+    assert_eq!(r.dims, "4x4x8");
+    assert_eq!(r.invalid, [0; 3]);
+    let errors: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("error: "))
+        .collect();
+    assert_eq!(errors.len(), hostile.len(), "{stderr}");
+    // In the order given, one per bad file.
+    for ((path, _), line) in hostile.iter().zip(&errors) {
+        assert!(
+            line.contains(path.file_name().unwrap().to_str().unwrap()),
+            "{line}"
+        );
+    }
+    assert_eq!(
+        stderr.lines().count(),
+        hostile.len() + 1,
+        "errors plus the dims warning:\n{stderr}"
+    );
+}
+
+#[test]
+fn constant_table_albedo_is_pi_times_the_value() {
+    // f = 0.1 / pi everywhere in every channel is Lambertian with albedo 0.1,
+    // whatever the dims; the quadrature weights sum to pi (to 1e-3).
+    let dir = tempfile::tempdir().unwrap();
+    let scales = [1.0 / 1500.0, 1.15 / 1500.0, 1.66 / 1500.0];
+    let (a, b, c) = (16, 16, 32);
+    let n = a * b * c;
+    let mut bytes: Vec<u8> = [a, b, c]
+        .iter()
+        .flat_map(|d: &i32| d.to_le_bytes())
+        .collect();
+    for s in scales {
+        let raw = 0.1 / std::f64::consts::PI / s;
+        bytes.extend(std::iter::repeat_n(raw.to_le_bytes(), n as usize).flatten());
+    }
+    let path = write(dir.path(), "lambert.binary", &bytes);
+    let out = brdf_atlas([Path::new("info"), &path]);
+    assert!(out.status.success(), "{}", texts(&out).1);
+    let r = reported(&texts(&out).0, &path);
+    for albedo in r.albedo {
+        assert!((albedo - 0.1).abs() <= 2e-4, "{r:?}");
+    }
+}
+
+#[test]
+fn demo_synthesises_and_summarises() {
+    let dir = tempfile::tempdir().unwrap();
+    let demo_dir = dir.path().join("demo");
+    let out = brdf_atlas(["demo", "--count", "2", "--dir", demo_dir.to_str().unwrap()]);
+    let (stdout, stderr) = texts(&out);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.is_empty(),
+        "full-size tables need no warning: {stderr}"
+    );
+    let files = binaries(&demo_dir.join("merl"));
+    assert_eq!(files.len(), 2);
+    for f in &files {
+        assert_eq!(std::fs::metadata(f).unwrap().len(), 34_992_012, "90x90x180");
+        let name = f.file_stem().unwrap().to_str().unwrap();
+        let row = stdout
+            .lines()
+            .find(|l| l.starts_with(name))
+            .unwrap_or_else(|| panic!("{name} in\n{stdout}"));
+        let albedo: Vec<f64> = row
+            .split_whitespace()
+            .skip(1)
+            .map(|v| v.parse().unwrap())
+            .collect();
+        assert_eq!(albedo.len(), 3, "{row}");
+        assert!(albedo.iter().all(|a| *a > 0.0 && *a < 1.5), "{row}");
+    }
+    assert!(
+        stdout.contains("[1/2]") && stdout.contains("[2/2]"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains(&demo_dir.join("merl").display().to_string()),
+        "says where the files went: {stdout}"
+    );
+}

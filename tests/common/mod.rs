@@ -1,0 +1,83 @@
+//! Helpers shared by the end-to-end tests: run the real binary, read its report.
+#![allow(dead_code)] // each test file uses its own subset
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+/// Run `brdf-atlas` with `args`, capturing everything.
+pub fn brdf_atlas<I, S>(args: I) -> Output
+where
+    I: IntoIterator<Item = S>,
+    S: AsRef<std::ffi::OsStr>,
+{
+    Command::new(env!("CARGO_BIN_EXE_brdf-atlas"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+/// stdout and stderr as text.
+pub fn texts(out: &Output) -> (String, String) {
+    (
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// One file's rows of the `info` table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Reported {
+    /// The DIMS column, e.g. `90x90x180`.
+    pub dims: String,
+    /// INVALID per channel.
+    pub invalid: [usize; 3],
+    /// ALBEDO per channel.
+    pub albedo: [f64; 3],
+}
+
+/// Find `path`'s three rows (R, G, B) in an `info` report.
+pub fn reported(stdout: &str, path: &Path) -> Reported {
+    let name = path.display().to_string();
+    let lines: Vec<&str> = stdout.lines().collect();
+    let at = lines
+        .iter()
+        .position(|l| {
+            l.strip_prefix(&name)
+                .is_some_and(|rest| rest.starts_with(' '))
+        })
+        .unwrap_or_else(|| panic!("no row for {name} in:\n{stdout}"));
+    assert!(at + 2 < lines.len(), "three rows for {name} in:\n{stdout}");
+    let first: Vec<&str> = lines[at][name.len()..].split_whitespace().collect();
+    assert_eq!(first.len(), 7, "row {:?}", lines[at]);
+    let dims = first[0].to_string();
+    let mut invalid = [0; 3];
+    let mut albedo = [0.0; 3];
+    for (c, channel) in ["R", "G", "B"].iter().enumerate() {
+        let cols: Vec<&str> = if c == 0 {
+            first[1..].to_vec()
+        } else {
+            lines[at + c].split_whitespace().collect()
+        };
+        assert_eq!(
+            cols.len(),
+            6,
+            "{channel} row of {name}: {:?}",
+            lines[at + c]
+        );
+        assert_eq!(cols[0], *channel, "{name}: {:?}", lines[at + c]);
+        invalid[c] = cols[1].parse().expect("INVALID is an integer");
+        albedo[c] = cols[5].parse().expect("ALBEDO is a number");
+    }
+    Reported {
+        dims,
+        invalid,
+        albedo,
+    }
+}
+
+/// The dims in a MERL file's header, formatted like the report.
+pub fn header_dims(path: &Path) -> String {
+    let bytes = std::fs::read(path).expect("readable");
+    let d = |k: usize| i32::from_le_bytes(bytes[4 * k..4 * k + 4].try_into().unwrap());
+    format!("{}x{}x{}", d(0), d(1), d(2))
+}
