@@ -34,7 +34,7 @@ use crate::kernel::Kernel;
 use crate::likelihood::{GramData, factor};
 
 /// Relative cost drift allowed between refactorisations; the refresh interval adapts to keep under it.
-const TARGET_DRIFT: f64 = 1e-11;
+const TARGET_DRIFT: f64 = 1e-10;
 
 /// Below this `g2` the update is numerically unreliable: evaluate densely instead.
 const MIN_DENOMINATOR: f64 = 1e-8;

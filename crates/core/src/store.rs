@@ -29,9 +29,9 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use brdf_merl::atomic::PendingFile;
-use brdf_merl::table::{is_invalid, physical};
+use brdf_merl::table::is_invalid;
 use brdf_merl::{Dims, MerlFile};
-use faer::linalg::matmul::matmul;
+use faer::linalg::matmul::triangular::{self as tri, BlockStructure};
 use faer::{Accum, Mat, MatRef, Par};
 use memmap2::Mmap;
 use rayon::prelude::*;
@@ -329,7 +329,17 @@ fn gram_fold(
                 fill(r0, buf);
                 // Row-major rows x n is column-major n x rows: columns are rows of Z.
                 let zc = MatRef::from_column_major_slice(buf, n, r1 - r0);
-                matmul(acc.as_mut(), Accum::Add, zc, zc.transpose(), 1.0, Par::Seq);
+                tri::matmul(
+                    acc.as_mut(),
+                    BlockStructure::TriangularLower,
+                    Accum::Add,
+                    zc,
+                    BlockStructure::Rectangular,
+                    zc.transpose(),
+                    BlockStructure::Rectangular,
+                    1.0,
+                    Par::Seq,
+                );
                 progress.advance((r1 - r0) as u64);
             }
             acc
@@ -339,12 +349,10 @@ fn gram_fold(
     for p in &partials {
         y += p;
     }
-    // Exact symmetry: the blocked product may differ in the last bit across the diagonal.
+    // Only the lower triangle was accumulated (half the flops): mirror it.
     for i in 0..n {
         for j in 0..i {
-            let v = 0.5 * (y[(i, j)] + y[(j, i)]);
-            y[(i, j)] = v;
-            y[(j, i)] = v;
+            y[(j, i)] = y[(i, j)];
         }
     }
     y
@@ -484,18 +492,24 @@ pub fn build_store(
     let y = gram_fold(layout.rows, n, progress, |r0, buf| {
         let rows = buf.len() / n;
         let mut raw = vec![0.0f64; rows];
+        let mut tv = vec![0.0f64; rows];
         let mut mean = vec![0.0f64; rows];
         let mut unmeasured = vec![1u8; rows];
         for (i, f) in data.files.iter().enumerate() {
             f.copy_raw(r0, &mut raw);
-            for (k, &v) in raw.iter().enumerate() {
-                let row = r0 + k;
-                let (c, bin) = (row / bins, row % bins);
-                let value = (!is_invalid(v)).then(|| physical(c, v));
-                if value.is_some() {
-                    unmeasured[k] = 0;
-                }
-                buf[k * n + i] = t.forward(bin, value);
+            // A block may straddle two channels: transform it in per-channel runs.
+            let mut k = 0;
+            while k < rows {
+                let (c, bin0) = ((r0 + k) / bins, (r0 + k) % bins);
+                let len = (rows - k).min(bins - bin0);
+                t.forward_raw_run(c, bin0, &raw[k..k + len], &mut tv[k..k + len]);
+                k += len;
+            }
+            for (u, &v) in unmeasured.iter_mut().zip(&raw) {
+                *u &= is_invalid(v) as u8;
+            }
+            for (dst, &v) in buf.iter_mut().skip(i).step_by(n).zip(&tv) {
+                *dst = v;
             }
         }
         let mut bytes = Vec::with_capacity(rows * n * precision.bytes());
@@ -530,7 +544,7 @@ pub fn build_store(
     if let Some(e) = first_error.into_inner().expect("no panics while locked") {
         return Err(CoreError::io(out, e));
     }
-    pending.commit().map_err(|e| CoreError::io(out, e))?;
+    pending.commit(false).map_err(|e| CoreError::io(out, e))?;
     Ok((Store::open(out)?, y))
 }
 

@@ -7,6 +7,7 @@
 //! dynamic range (1e-3 .. 1e4) so that highlights do not dominate the fit.
 
 use brdf_merl::Dims;
+use brdf_merl::table::{is_invalid, physical};
 use serde::{Deserialize, Serialize};
 
 /// Which transform a store and model use.
@@ -58,6 +59,14 @@ pub trait Transform: Send + Sync {
     fn forward(&self, bin: usize, value: Option<f64>) -> f64;
     /// Latent-space value -> reflectance, clamped to `>= 0`.
     fn inverse(&self, bin: usize, t: f64) -> f64;
+
+    /// Transform a run of raw MERL file values of `channel`, bins
+    /// `bin0 .. bin0 + raw.len()`, into `out`: the hot loop of a store build.
+    fn forward_raw_run(&self, channel: usize, bin0: usize, raw: &[f64], out: &mut [f64]) {
+        for (k, (o, &v)) in out.iter_mut().zip(raw).enumerate() {
+            *o = self.forward(bin0 + k, (!is_invalid(v)).then(|| physical(channel, v)));
+        }
+    }
 }
 
 /// The identity on reflectance.
@@ -71,6 +80,13 @@ impl Transform for Raw {
     #[inline]
     fn inverse(&self, _bin: usize, t: f64) -> f64 {
         t.max(0.0)
+    }
+
+    fn forward_raw_run(&self, channel: usize, _bin0: usize, raw: &[f64], out: &mut [f64]) {
+        let scale = physical(channel, 1.0);
+        for (o, &v) in out.iter_mut().zip(raw) {
+            *o = if is_invalid(v) { 0.0 } else { v * scale };
+        }
     }
 }
 

@@ -39,7 +39,12 @@ pub struct Quadrature {
 /// Integrand weight at a point of `(u, theta_d, phi_d)` space, per unit volume.
 fn density(u: f64, theta_d: f64, phi_d: f64) -> f64 {
     let theta_h = u * u * FRAC_PI_2;
-    let hd = HalfDiff { theta_h, phi_h: 0.0, theta_d, phi_d };
+    let hd = HalfDiff {
+        theta_h,
+        phi_h: 0.0,
+        theta_d,
+        phi_d,
+    };
     let (ci, co) = hd.cosines();
     if ci <= 0.0 || co <= 0.0 {
         return 0.0;
@@ -66,7 +71,8 @@ impl Quadrature {
                     let td = (it as f64 + 0.5) * dt;
                     for ip in 0..np {
                         let pd = (ip as f64 + 0.5) * dp;
-                        out[(it / sub) * dims.phi_d + ip / sub] += density(u, td, pd) * du * dt * dp;
+                        out[(it / sub) * dims.phi_d + ip / sub] +=
+                            density(u, td, pd) * du * dt * dp;
                     }
                 }
             }
@@ -91,7 +97,8 @@ impl Quadrature {
                 let id = dims.theta_d_index(td);
                 for ip in 0..np {
                     let pd = (ip as f64 + 0.5) * dp;
-                    dense[dims.bin(ih, id, dims.phi_d_index(pd))] += density(u, td, pd) * du * dt * dp;
+                    dense[dims.bin(ih, id, dims.phi_d_index(pd))] +=
+                        density(u, td, pd) * du * dt * dp;
                 }
             }
         }
@@ -105,7 +112,11 @@ impl Quadrature {
             .filter(|(_, w)| **w > 0.0)
             .map(|(b, w)| (b as u32, *w))
             .unzip();
-        Quadrature { dims, bins, weights }
+        Quadrature {
+            dims,
+            bins,
+            weights,
+        }
     }
 
     /// The grid this rule is for.
@@ -148,7 +159,11 @@ impl Quadrature {
     /// Albedo of a table (unmeasured bins count as 0). Panics if the table's
     /// dims differ from the rule's; see [`Quadrature::dims`].
     pub fn albedo(&self, table: &MerlTable) -> [f64; 3] {
-        assert_eq!(table.dims(), self.dims, "quadrature rule built for other dims");
+        assert_eq!(
+            table.dims(),
+            self.dims,
+            "quadrature rule built for other dims"
+        );
         self.integrate(|b| table.rgb_or_zero(b))
     }
 }
@@ -189,8 +204,16 @@ mod tests {
     #[test]
     fn same_bits_whatever_the_thread_count() {
         let dims = Dims::new(30, 30, 60).unwrap();
-        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| Quadrature::dense(dims, 2));
-        let two = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap().install(|| Quadrature::dense(dims, 2));
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap()
+            .install(|| Quadrature::dense(dims, 2));
+        let two = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap()
+            .install(|| Quadrature::dense(dims, 2));
         assert_eq!(one, two);
     }
 }

@@ -35,18 +35,31 @@ pub const MAX_DIM: usize = 1024;
 
 impl Dims {
     /// The real MERL resolution, the one BRDF Explorer needs: 90 x 90 x 180.
-    pub const MERL: Dims = Dims { theta_h: 90, theta_d: 90, phi_d: 180 };
+    pub const MERL: Dims = Dims {
+        theta_h: 90,
+        theta_d: 90,
+        phi_d: 180,
+    };
 
     /// Checked constructor: every dim in `1..=MAX_DIM`.
     pub fn new(theta_h: usize, theta_d: usize, phi_d: usize) -> Result<Dims> {
-        let bad = |why| MerlError::InvalidDims { a: theta_h, b: theta_d, c: phi_d, why };
+        let bad = |why| MerlError::InvalidDims {
+            a: theta_h,
+            b: theta_d,
+            c: phi_d,
+            why,
+        };
         if theta_h == 0 || theta_d == 0 || phi_d == 0 {
             return Err(bad("every dimension must be at least 1"));
         }
         if theta_h > MAX_DIM || theta_d > MAX_DIM || phi_d > MAX_DIM {
             return Err(bad("a dimension is larger than 1024"));
         }
-        Ok(Dims { theta_h, theta_d, phi_d })
+        Ok(Dims {
+            theta_h,
+            theta_d,
+            phi_d,
+        })
     }
 
     /// Number of bins in one colour channel.
@@ -93,7 +106,11 @@ impl Dims {
 
     /// Half/difference angles -> flat bin.
     pub fn bin_of(&self, theta_h: f64, theta_d: f64, phi_d: f64) -> usize {
-        self.bin(self.theta_h_index(theta_h), self.theta_d_index(theta_d), self.phi_d_index(phi_d))
+        self.bin(
+            self.theta_h_index(theta_h),
+            self.theta_d_index(theta_d),
+            self.phi_d_index(phi_d),
+        )
     }
 
     /// Incident and outgoing directions -> flat bin, or `None` when either
@@ -293,8 +310,17 @@ mod tests {
 
     #[test]
     fn half_diff_round_trip() {
-        for &(th, td, pd, ph) in &[(0.3, 0.2, 1.0, 0.0), (0.05, 0.7, -2.0, 1.3), (0.6, 0.4, 2.9, -0.4)] {
-            let hd = HalfDiff { theta_h: th, phi_h: ph, theta_d: td, phi_d: pd };
+        for &(th, td, pd, ph) in &[
+            (0.3, 0.2, 1.0, 0.0),
+            (0.05, 0.7, -2.0, 1.3),
+            (0.6, 0.4, 2.9, -0.4),
+        ] {
+            let hd = HalfDiff {
+                theta_h: th,
+                phi_h: ph,
+                theta_d: td,
+                phi_d: pd,
+            };
             let (wi, wo) = hd.directions();
             assert!((dot(wi, wi) - 1.0).abs() < 1e-12 && (dot(wo, wo) - 1.0).abs() < 1e-12);
             let back = HalfDiff::from_directions(wi, wo).unwrap();
@@ -318,9 +344,21 @@ mod tests {
 
     #[test]
     fn below_horizon_and_garbage_have_no_bin() {
-        assert!(M.bin_of_directions([0.0, 0.0, 1.0], [0.0, 0.3, -1.0]).is_none());
-        assert!(M.bin_of_directions([0.0, 0.0, 0.0], [0.0, 0.0, 1.0]).is_none());
-        assert!(M.bin_of_directions([f64::NAN, 0.0, 1.0], [0.0, 0.0, 1.0]).is_none());
-        assert_eq!(M.bin_of_directions([0.0, 0.0, 1.0], [0.0, 0.0, 1.0]), Some(0));
+        assert!(
+            M.bin_of_directions([0.0, 0.0, 1.0], [0.0, 0.3, -1.0])
+                .is_none()
+        );
+        assert!(
+            M.bin_of_directions([0.0, 0.0, 0.0], [0.0, 0.0, 1.0])
+                .is_none()
+        );
+        assert!(
+            M.bin_of_directions([f64::NAN, 0.0, 1.0], [0.0, 0.0, 1.0])
+                .is_none()
+        );
+        assert_eq!(
+            M.bin_of_directions([0.0, 0.0, 1.0], [0.0, 0.0, 1.0]),
+            Some(0)
+        );
     }
 }

@@ -12,7 +12,10 @@ static COUNTER: AtomicU64 = AtomicU64::new(0);
 /// A temporary path in the same directory as `path` (so the final rename
 /// never crosses file systems), unique within this process.
 pub fn temp_path_for(path: &Path) -> PathBuf {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let n = COUNTER.fetch_add(1, Ordering::Relaxed);
     path.with_file_name(format!(".{name}.tmp-{}-{n}", std::process::id()))
 }
@@ -52,8 +55,16 @@ impl PendingFile {
     /// Create the temporary file for `target`.
     pub fn create(target: &Path) -> io::Result<PendingFile> {
         let tmp = temp_path_for(target);
-        let file = File::options().read(true).write(true).create_new(true).open(&tmp)?;
-        Ok(PendingFile { tmp, target: target.to_path_buf(), file: Some(file) })
+        let file = File::options()
+            .read(true)
+            .write(true)
+            .create_new(true)
+            .open(&tmp)?;
+        Ok(PendingFile {
+            tmp,
+            target: target.to_path_buf(),
+            file: Some(file),
+        })
     }
 
     /// The open temporary file.
@@ -61,10 +72,16 @@ impl PendingFile {
         self.file.as_ref().expect("file present until commit")
     }
 
-    /// Sync and rename over the target.
-    pub fn commit(mut self) -> io::Result<()> {
+    /// Rename over the target; with `sync`, flush the data to disk first.
+    ///
+    /// Without `sync` the rename is still atomic for every reader, but a
+    /// power loss may leave a truncated file: right for large derived data
+    /// that carries its own checksum (a store), not for a user's only copy.
+    pub fn commit(mut self, sync: bool) -> io::Result<()> {
         let file = self.file.take().expect("file present until commit");
-        file.sync_all()?;
+        if sync {
+            file.sync_all()?;
+        }
         drop(file);
         std::fs::rename(&self.tmp, &self.target)?;
         self.tmp = PathBuf::new();
@@ -110,7 +127,7 @@ mod tests {
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
         let p = PendingFile::create(&path).unwrap();
         p.file().set_len(10).unwrap();
-        p.commit().unwrap();
+        p.commit(true).unwrap();
         assert_eq!(std::fs::metadata(&path).unwrap().len(), 10);
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     }

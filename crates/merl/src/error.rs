@@ -99,7 +99,10 @@ pub enum MerlError {
 
 impl MerlError {
     pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
-        MerlError::Io { path: path.into(), source }
+        MerlError::Io {
+            path: path.into(),
+            source,
+        }
     }
 }
 

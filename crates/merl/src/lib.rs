@@ -25,4 +25,4 @@ pub mod table;
 pub use albedo::Quadrature;
 pub use angles::{Dims, HalfDiff, Vec3};
 pub use error::{MerlError, Result};
-pub use table::{MerlFile, MerlTable, INVALID, SCALE};
+pub use table::{INVALID, MerlFile, MerlTable, SCALE};

@@ -11,7 +11,7 @@ use std::f64::consts::PI;
 use rayon::prelude::*;
 
 use crate::angles::{Dims, HalfDiff, Vec3};
-use crate::table::{MerlTable, raw_from_physical, INVALID};
+use crate::table::{INVALID, MerlTable, raw_from_physical};
 
 /// An analytic isotropic BRDF: Lambert + GGX microfacet with Fresnel.
 #[derive(Debug, Clone, PartialEq)]
@@ -165,19 +165,40 @@ pub fn database(count: usize, seed: u64) -> Vec<SynthMaterial> {
     let mut rng = SplitMix64::new(seed);
     (0..count)
         .map(|i| {
-            let jitter = |rng: &mut SplitMix64, c: [f64; 3]| c.map(|v| (v * rng.range(0.85, 1.15)).clamp(0.0, 1.0));
+            let jitter = |rng: &mut SplitMix64, c: [f64; 3]| {
+                c.map(|v| (v * rng.range(0.85, 1.15)).clamp(0.0, 1.0))
+            };
             // Roughness spread log-uniformly from mirror-like to very rough.
             let alpha = (rng.range(0.03f64.ln(), 0.7f64.ln())).exp();
             let metal = i % 2 == 0;
             let (kind, colour, brdf) = if metal {
                 let (name, f0) = METALS[(rng.next_u64() % METALS.len() as u64) as usize];
-                ("metal", name, Analytic { diffuse: [0.0; 3], f0: jitter(&mut rng, f0), alpha })
+                (
+                    "metal",
+                    name,
+                    Analytic {
+                        diffuse: [0.0; 3],
+                        f0: jitter(&mut rng, f0),
+                        alpha,
+                    },
+                )
             } else {
                 let (name, base) = PAINTS[(rng.next_u64() % PAINTS.len() as u64) as usize];
                 let f0 = [0.04; 3];
-                ("plastic", name, Analytic { diffuse: jitter(&mut rng, base), f0, alpha })
+                (
+                    "plastic",
+                    name,
+                    Analytic {
+                        diffuse: jitter(&mut rng, base),
+                        f0,
+                        alpha,
+                    },
+                )
             };
-            SynthMaterial { name: format!("{i:03}-{kind}-{colour}-r{alpha:.2}"), brdf }
+            SynthMaterial {
+                name: format!("{i:03}-{kind}-{colour}-r{alpha:.2}"),
+                brdf,
+            }
         })
         .collect()
 }
@@ -215,8 +236,16 @@ mod tests {
     fn microfacet_table_albedo_matches_monte_carlo() {
         let q = Quadrature::dense(Dims::MERL, 2);
         for brdf in [
-            Analytic { diffuse: [0.5, 0.2, 0.1], f0: [0.04; 3], alpha: 0.3 },
-            Analytic { diffuse: [0.0; 3], f0: [0.95, 0.64, 0.54], alpha: 0.5 },
+            Analytic {
+                diffuse: [0.5, 0.2, 0.1],
+                f0: [0.04; 3],
+                alpha: 0.3,
+            },
+            Analytic {
+                diffuse: [0.0; 3],
+                f0: [0.95, 0.64, 0.54],
+                alpha: 0.5,
+            },
         ] {
             let table = brdf.table(Dims::MERL);
             let quad = q.albedo(&table);
@@ -225,7 +254,13 @@ mod tests {
                 // The tolerance: 4 standard errors of the estimate plus the
                 // tabulation error of a 90x90x180 grid (measured: under 0.5%).
                 let tol = 4.0 * se[c] + 0.006 * mc[c];
-                assert!((quad[c] - mc[c]).abs() < tol, "{brdf:?} channel {c}: quadrature {} vs MC {} ± {}", quad[c], mc[c], se[c]);
+                assert!(
+                    (quad[c] - mc[c]).abs() < tol,
+                    "{brdf:?} channel {c}: quadrature {} vs MC {} ± {}",
+                    quad[c],
+                    mc[c],
+                    se[c]
+                );
             }
         }
     }
@@ -237,7 +272,10 @@ mod tests {
         assert_ne!(a, database(12, 43));
         let names: std::collections::HashSet<_> = a.iter().map(|m| m.name.clone()).collect();
         assert_eq!(names.len(), 12);
-        assert!(a.iter().any(|m| m.brdf.diffuse == [0.0; 3]) && a.iter().any(|m| m.brdf.diffuse != [0.0; 3]));
+        assert!(
+            a.iter().any(|m| m.brdf.diffuse == [0.0; 3])
+                && a.iter().any(|m| m.brdf.diffuse != [0.0; 3])
+        );
     }
 
     #[test]
@@ -246,7 +284,11 @@ mod tests {
         let t = database(1, 1)[0].brdf.table(dims);
         for bin in 0..dims.bins() {
             let (ci, co) = dims.angles_of(bin).cosines();
-            assert_eq!(t.value(0, bin).is_none(), ci <= 0.0 || co <= 0.0, "bin {bin}");
+            assert_eq!(
+                t.value(0, bin).is_none(),
+                ci <= 0.0 || co <= 0.0,
+                "bin {bin}"
+            );
         }
     }
 }

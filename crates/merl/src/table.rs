@@ -55,7 +55,10 @@ pub struct MerlFile {
 
 impl std::fmt::Debug for MerlFile {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("MerlFile").field("path", &self.path).field("dims", &self.dims).finish()
+        f.debug_struct("MerlFile")
+            .field("path", &self.path)
+            .field("dims", &self.dims)
+            .finish()
     }
 }
 
@@ -70,7 +73,12 @@ impl MerlFile {
         let map = unsafe { Mmap::map(&file) }.map_err(|e| MerlError::io(&path, e))?;
         let dims = check_header(&path, &map, len)?;
         let invalid = scan_values(&path, &map[HEADER_BYTES..])?;
-        Ok(MerlFile { path, dims, map, invalid })
+        Ok(MerlFile {
+            path,
+            dims,
+            map,
+            invalid,
+        })
     }
 
     /// The file this was read from.
@@ -107,24 +115,42 @@ impl MerlFile {
     pub fn to_table(&self) -> MerlTable {
         let mut values = vec![0.0; self.dims.values()];
         self.copy_raw(0, &mut values);
-        MerlTable { dims: self.dims, values }
+        MerlTable {
+            dims: self.dims,
+            values,
+        }
     }
 }
 
 fn check_header(path: &Path, bytes: &[u8], len: u64) -> Result<Dims> {
     if bytes.starts_with(b"version https://git-lfs") {
-        return Err(MerlError::LfsPointer { path: path.to_path_buf() });
+        return Err(MerlError::LfsPointer {
+            path: path.to_path_buf(),
+        });
     }
     if len < HEADER_BYTES as u64 {
-        return Err(MerlError::TooShort { path: path.to_path_buf(), len });
+        return Err(MerlError::TooShort {
+            path: path.to_path_buf(),
+            len,
+        });
     }
     let dim = |k: usize| i32::from_le_bytes(bytes[4 * k..4 * k + 4].try_into().expect("4 bytes"));
     let (a, b, c) = (dim(0), dim(1), dim(2));
     let max = MAX_DIM as i32;
     if !(1..=max).contains(&a) || !(1..=max).contains(&b) || !(1..=max).contains(&c) {
-        return Err(MerlError::BadDims { path: path.to_path_buf(), a, b, c, max });
+        return Err(MerlError::BadDims {
+            path: path.to_path_buf(),
+            a,
+            b,
+            c,
+            max,
+        });
     }
-    let dims = Dims { theta_h: a as usize, theta_d: b as usize, phi_d: c as usize };
+    let dims = Dims {
+        theta_h: a as usize,
+        theta_d: b as usize,
+        phi_d: c as usize,
+    };
     let expected = (HEADER_BYTES + 8 * dims.values()) as u64;
     if len != expected {
         return Err(MerlError::SizeMismatch {
@@ -201,7 +227,9 @@ impl MerlTable {
         let mut values = vec![0.0; dims.values()];
         for bin in 0..n {
             match f(bin) {
-                Some(rgb) => (0..3).for_each(|c| values[c * n + bin] = raw_from_physical(c, rgb[c])),
+                Some(rgb) => {
+                    (0..3).for_each(|c| values[c * n + bin] = raw_from_physical(c, rgb[c]))
+                }
                 None => (0..3).for_each(|c| values[c * n + bin] = INVALID),
             }
         }
@@ -223,7 +251,9 @@ impl MerlTable {
             let mut buf = Vec::with_capacity(8 * 4096);
             for chunk in self.values.chunks(4096) {
                 buf.clear();
-                chunk.iter().for_each(|v| buf.extend_from_slice(&v.to_le_bytes()));
+                chunk
+                    .iter()
+                    .for_each(|v| buf.extend_from_slice(&v.to_le_bytes()));
                 w.write_all(&buf)?;
             }
             Ok(())
@@ -264,7 +294,11 @@ impl MerlTable {
     /// measured in some channel.
     pub fn eval(&self, wi: Vec3, wo: Vec3) -> Option<[f64; 3]> {
         let bin = self.dims.bin_of_directions(wi, wo)?;
-        Some([self.value(0, bin)?, self.value(1, bin)?, self.value(2, bin)?])
+        Some([
+            self.value(0, bin)?,
+            self.value(1, bin)?,
+            self.value(2, bin)?,
+        ])
     }
 
     /// Number of unmeasured values over all channels.
@@ -276,7 +310,8 @@ impl MerlTable {
     pub fn channel_stats(&self) -> [ChannelStats; 3] {
         let n = self.dims.bins();
         [0, 1, 2].map(|c| {
-            let (mut min, mut max, mut sum, mut count) = (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0usize);
+            let (mut min, mut max, mut sum, mut count) =
+                (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0usize);
             for &raw in &self.values[c * n..(c + 1) * n] {
                 if !is_invalid(raw) {
                     let v = physical(c, raw);
@@ -286,8 +321,17 @@ impl MerlTable {
                     count += 1;
                 }
             }
-            let mean = if count > 0 { sum / count as f64 } else { f64::NAN };
-            ChannelStats { min, max, mean, invalid: n - count }
+            let mean = if count > 0 {
+                sum / count as f64
+            } else {
+                f64::NAN
+            };
+            ChannelStats {
+                min,
+                max,
+                mean,
+                invalid: n - count,
+            }
         })
     }
 }
@@ -298,7 +342,13 @@ mod tests {
 
     fn small() -> MerlTable {
         let dims = Dims::new(4, 3, 6).unwrap();
-        MerlTable::from_fn(dims, |b| if b % 7 == 3 { None } else { Some([b as f64 * 0.01, 0.5, 1.0 + b as f64]) })
+        MerlTable::from_fn(dims, |b| {
+            if b % 7 == 3 {
+                None
+            } else {
+                Some([b as f64 * 0.01, 0.5, 1.0 + b as f64])
+            }
+        })
     }
 
     #[test]
@@ -352,12 +402,34 @@ mod tests {
 
         let cases: Vec<(PathBuf, &str)> = vec![
             (write_bytes(d, "empty.binary", b""), "too short"),
-            (write_bytes(d, "trunc.binary", &bytes[..bytes.len() - 5]), "but the file has"),
-            (write_bytes(d, "lfs.binary", b"version https://git-lfs.github.com/spec/v1\noid sha256:ab\nsize 34992012\n"), "Git LFS pointer"),
-            (write_bytes(d, "neg.binary", &header(-90, 90, 180)), "expected three positive dims"),
-            (write_bytes(d, "huge.binary", &header(90, 90, 1 << 30)), "expected three positive dims"),
-            (write_bytes(d, "zero.binary", &header(0, 90, 180)), "expected three positive dims"),
-            (write_bytes(d, "hdr-only.binary", &header(90, 90, 180)), "header says 90x90x180"),
+            (
+                write_bytes(d, "trunc.binary", &bytes[..bytes.len() - 5]),
+                "but the file has",
+            ),
+            (
+                write_bytes(
+                    d,
+                    "lfs.binary",
+                    b"version https://git-lfs.github.com/spec/v1\noid sha256:ab\nsize 34992012\n",
+                ),
+                "Git LFS pointer",
+            ),
+            (
+                write_bytes(d, "neg.binary", &header(-90, 90, 180)),
+                "expected three positive dims",
+            ),
+            (
+                write_bytes(d, "huge.binary", &header(90, 90, 1 << 30)),
+                "expected three positive dims",
+            ),
+            (
+                write_bytes(d, "zero.binary", &header(0, 90, 180)),
+                "expected three positive dims",
+            ),
+            (
+                write_bytes(d, "hdr-only.binary", &header(90, 90, 180)),
+                "header says 90x90x180",
+            ),
             (
                 {
                     let mut b = bytes.clone();
@@ -383,7 +455,9 @@ mod tests {
             assert!(err.contains(want), "{name}: {err}");
             assert!(!err.contains('\n'), "one line: {err}");
         }
-        let missing = MerlFile::open(d.join("missing.binary")).unwrap_err().to_string();
+        let missing = MerlFile::open(d.join("missing.binary"))
+            .unwrap_err()
+            .to_string();
         assert!(missing.contains("missing.binary"), "{missing}");
     }
 
