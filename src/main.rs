@@ -20,6 +20,12 @@ use clap::{Parser, Subcommand};
 
 use crate::error::Error;
 
+/// Shown after the top-level help.
+const EXAMPLES: &str = "Examples:
+  brdf-atlas demo                                  synthesise 16 materials and summarise them
+  brdf-atlas synth --count 8 --seed 3 materials/   write 8 synthetic 90x90x180 MERL files
+  brdf-atlas info materials/*.binary               check and summarise MERL files";
+
 /// Explore the space of measured BRDFs.
 ///
 /// brdf-atlas reads and writes BRDF tables in the MERL `.binary` layout
@@ -33,7 +39,8 @@ use crate::error::Error;
     version,
     about,
     long_about,
-    propagate_version = true
+    propagate_version = true,
+    after_help = EXAMPLES
 )]
 struct Cli {
     #[command(subcommand)]
@@ -78,10 +85,11 @@ enum Command {
         #[arg(value_name = "OUT_DIR")]
         out_dir: PathBuf,
     },
-    /// Run the whole pipeline on the embedded synthetic database.
+    /// Show brdf-atlas at work on its embedded synthetic database, no download needed.
     ///
-    /// Synthesises materials at the full MERL resolution into DIR/merl/ and
-    /// summarises them (name and albedo). Needs about 35 MB of disk per material.
+    /// Synthesises materials at the full MERL resolution into DIR/merl/,
+    /// reads them back and summarises them (name and albedo). Needs about
+    /// 35 MB of disk per material.
     Demo {
         /// Working directory for everything the demo writes.
         #[arg(long, default_value = "brdf-atlas-demo")]
