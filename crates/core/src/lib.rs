@@ -13,9 +13,12 @@ pub mod gplvm;
 pub mod incremental;
 pub mod kernel;
 pub mod likelihood;
+pub mod locate;
+pub mod map;
 pub mod model;
 pub mod optim;
 pub mod pca;
+pub mod reconstruct;
 pub mod store;
 pub mod transform;
 

@@ -22,7 +22,7 @@ use crate::kernel::Kernel;
 use crate::likelihood::GramData;
 use crate::optim::OptimizerKind;
 use crate::store::{Dataset, Precision, Store, build_store};
-use crate::transform::TransformKind;
+use crate::transform::{Transform, TransformKind};
 
 /// The `format` field of every model file.
 pub const FORMAT: &str = "brdf-atlas-model";
@@ -86,6 +86,9 @@ pub struct ModelFile {
     pub signal_variance: f64,
     /// The fit.
     pub fit: FitRecord,
+    /// The Gram matrix `Y = Z Z^T` of the centred data (not normalised),
+    /// row by row: what locating a new material needs.
+    pub gram: Vec<Vec<f64>>,
     /// The store.
     pub store: StoreRef,
 }
@@ -97,6 +100,8 @@ pub struct Model {
     store: Store,
     latent: Mat<f64>,
     llt: faer::linalg::solvers::Llt<f64>,
+    pub(crate) transform: Box<dyn Transform>,
+    pub(crate) gram: Mat<f64>,
 }
 
 impl std::fmt::Debug for Model {
@@ -207,6 +212,17 @@ impl Model {
                 path.display()
             )));
         }
+        if file.gram.len() != n
+            || file
+                .gram
+                .iter()
+                .any(|r| r.len() != n || r.iter().any(|v| !v.is_finite()))
+        {
+            return Err(bad(format!(
+                "the Gram matrix must be {n}x{n} finite numbers"
+            )));
+        }
+        let gram = Mat::from_fn(n, n, |i, j| file.gram[i][j]);
         let latent = Mat::from_fn(n, q, |i, c| file.latent[i][c]);
         let llt = kernel
             .matrix(latent.as_ref())
@@ -214,12 +230,15 @@ impl Model {
             .map_err(|_| CoreError::NotPositiveDefinite {
                 context: format!("opening {}", path.display()),
             })?;
+        let transform = file.transform.build(dims);
         Ok(Model {
             path,
             file,
             store,
             latent,
             llt,
+            transform,
+            gram,
         })
     }
 
@@ -264,6 +283,16 @@ impl Model {
     /// Table dims.
     pub fn dims(&self) -> Dims {
         self.store.dims()
+    }
+
+    /// `K^-1 B` for a right-hand side with `N` rows.
+    pub fn llt_solve(&self, b: &Mat<f64>) -> Mat<f64> {
+        self.llt.solve(b)
+    }
+
+    /// The Gram matrix `Y = Z Z^T` of the stored (centred, transformed) data.
+    pub fn gram(&self) -> &Mat<f64> {
+        &self.gram
     }
 
     /// The blend weights `w(x) = K^-1 k(x)` at a latent point.
@@ -336,6 +365,9 @@ pub fn fit_dir(
     )?;
     let store_time = t1.elapsed();
     let t2 = Instant::now();
+    let gram_rows: Vec<Vec<f64>> = (0..y.nrows())
+        .map(|i| (0..y.ncols()).map(|j| y[(i, j)]).collect())
+        .collect();
     let gram = GramData::new(y, store.rows())?;
     let fit = options.params.fit(&gram, progress)?;
     let optimise_time = t2.elapsed();
@@ -365,6 +397,7 @@ pub fn fit_dir(
             drift: o.drift,
             eigenvalues: fit.eigenvalues.clone(),
         },
+        gram: gram_rows,
         store: StoreRef {
             path: store_path
                 .file_name()

@@ -84,7 +84,14 @@ impl Quadrature {
     /// over the whole domain (`n x n x 2n` cells, `phi_d` twice as fine),
     /// each sample looking up the bin it falls in. Fewer samples, fewer bins
     /// to evaluate, larger error: the accuracy/time trade of the albedo map.
+    /// From one sample per bin up, the rule is [`Quadrature::dense`] with as
+    /// many sub-cells per bin as the budget allows, which converges faster
+    /// than a grid that straddles bin edges.
     pub fn with_samples(dims: Dims, samples: usize) -> Quadrature {
+        if samples >= dims.bins() {
+            let sub = ((samples / dims.bins()) as f64).cbrt().floor() as usize;
+            return Quadrature::dense(dims, sub.max(1));
+        }
         let n = ((samples.max(2) as f64 / 2.0).cbrt().round() as usize).max(1);
         let (nu, nt, np) = (n, n, 2 * n);
         let (du, dt, dp) = (1.0 / nu as f64, FRAC_PI_2 / nt as f64, PI / np as f64);

@@ -1,0 +1,371 @@
+//! The albedo map of a 2-D latent space: every pixel is a latent point,
+//! coloured by the albedo of the material reconstructed there.
+//!
+//! Two ways to compute it, chosen by what the transform allows:
+//!
+//! - **Linear** (raw transform): albedo is linear in the BRDF, so with the
+//!   per-material albedos `A` (`N x 3`, integrated once from the store with
+//!   the dense quadrature rule) the map is `albedo(x) = albedo(mean) + k(x)^T K^-1 A`:
+//!   `N` exponentials and `3N` multiply-adds a pixel. This is the albedo of the
+//!   blend before clamping negative values.
+//! - **Quadrature** (log transform, or on request): the inverse transform is
+//!   not linear, so each pixel reconstructs exactly the bins of a quadrature
+//!   rule with `samples` points and integrates them. The rows the rule needs
+//!   are gathered once and premultiplied by `K^-1` (`C = Z_q K^-1`), so a row of
+//!   pixels is one matrix product `C k(X_row)`. The sample count trades
+//!   accuracy for time (see the README's figures).
+
+use brdf_merl::Quadrature;
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, Par};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{CoreError, Progress, Result};
+use crate::model::Model;
+use crate::store::Rows;
+
+/// A window of the latent plane: `x` in `[x0, x1]`, `y` in `[y0, y1]`, y up.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct View {
+    /// Left edge.
+    pub x0: f64,
+    /// Right edge.
+    pub x1: f64,
+    /// Bottom edge.
+    pub y0: f64,
+    /// Top edge.
+    pub y1: f64,
+}
+
+impl Default for View {
+    /// The box `[-1, 1]^2` plus a 10% margin.
+    fn default() -> Self {
+        View {
+            x0: -1.1,
+            x1: 1.1,
+            y0: -1.1,
+            y1: 1.1,
+        }
+    }
+}
+
+impl View {
+    /// Check the window is finite and not empty.
+    pub fn check(&self) -> Result<()> {
+        let ok = [self.x0, self.x1, self.y0, self.y1]
+            .iter()
+            .all(|v| v.is_finite())
+            && self.x0 < self.x1
+            && self.y0 < self.y1;
+        if ok {
+            Ok(())
+        } else {
+            Err(CoreError::BadQuery(format!(
+                "view window {self:?} must be finite with x0 < x1 and y0 < y1"
+            )))
+        }
+    }
+
+    /// Latent point at the centre of pixel `(px, py)` of a `width x height` image (row 0 at the top).
+    pub fn pixel_to_latent(&self, px: f64, py: f64, width: usize, height: usize) -> [f64; 2] {
+        [
+            self.x0 + (px + 0.5) * (self.x1 - self.x0) / width as f64,
+            self.y1 - (py + 0.5) * (self.y1 - self.y0) / height as f64,
+        ]
+    }
+
+    /// Pixel coordinates (continuous, centres at `k + 0.5`) of a latent point.
+    pub fn latent_to_pixel(&self, x: [f64; 2], width: usize, height: usize) -> [f64; 2] {
+        [
+            (x[0] - self.x0) / (self.x1 - self.x0) * width as f64,
+            (self.y1 - x[1]) / (self.y1 - self.y0) * height as f64,
+        ]
+    }
+}
+
+/// How a map's albedo was computed.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase", tag = "kind")]
+pub enum AlbedoMethod {
+    /// Blended per-material albedos (exact for the raw transform).
+    Linear,
+    /// Per-pixel quadrature over reconstructed bins.
+    Quadrature {
+        /// Requested sample count.
+        samples: usize,
+        /// Bins the rule reads.
+        bins: usize,
+    },
+}
+
+/// An albedo map: linear RGB albedo per pixel, row 0 at the top.
+#[derive(Debug, Clone)]
+pub struct AlbedoMap {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// The latent window shown.
+    pub view: View,
+    /// Linear RGB albedo, `width * height`, row-major.
+    pub rgb: Vec<[f32; 3]>,
+    /// How it was computed.
+    pub method: AlbedoMethod,
+}
+
+/// Luminance of linear RGB (Rec. 709 weights).
+pub fn luminance(c: [f32; 3]) -> f32 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+impl Model {
+    /// Per-material albedos in transformed space (rows of `A`) and the albedo
+    /// of the mean, with `rule`; linear transforms only make this an albedo.
+    pub fn material_albedos(&self, rule: &Quadrature) -> (Vec<[f64; 3]>, [f64; 3]) {
+        let store = self.store();
+        let (n, bins) = (store.n(), store.dims().bins());
+        let unmeasured = store.unmeasured();
+        let mean = store.mean();
+        let chunk = 16384;
+        let partials: Vec<(Vec<[f64; 3]>, [f64; 3])> = rule
+            .bins()
+            .par_chunks(chunk)
+            .zip(rule.weights().par_chunks(chunk))
+            .map(|(bs, ws)| {
+                let mut a = vec![[0.0f64; 3]; n];
+                let mut m = [0.0f64; 3];
+                let mut z = vec![0.0f64; n];
+                for (&b, &w) in bs.iter().zip(ws) {
+                    for c in 0..3 {
+                        let row = c * bins + b as usize;
+                        if unmeasured[row] != 0 {
+                            continue;
+                        }
+                        store.copy_rows(row, &mut z);
+                        for (ai, zi) in a.iter_mut().zip(&z) {
+                            ai[c] += w * zi;
+                        }
+                        m[c] += w * mean[row];
+                    }
+                }
+                (a, m)
+            })
+            .collect();
+        let mut a = vec![[0.0f64; 3]; n];
+        let mut m = [0.0f64; 3];
+        for (pa, pm) in partials {
+            for (ai, pi) in a.iter_mut().zip(pa) {
+                (0..3).for_each(|c| ai[c] += pi[c]);
+            }
+            (0..3).for_each(|c| m[c] += pm[c]);
+        }
+        (a, m)
+    }
+
+    /// The albedo map of a `width x height` image of `view`. `samples`:
+    /// `None` uses the linear shortcut (raw transform only; an error
+    /// otherwise), `Some(s)` integrates each pixel with an `s`-point rule.
+    pub fn albedo_map(
+        &self,
+        width: usize,
+        height: usize,
+        view: View,
+        samples: Option<usize>,
+        progress: &dyn Progress,
+    ) -> Result<AlbedoMap> {
+        if self.q() != 2 {
+            return Err(CoreError::BadQuery(format!(
+                "a map needs a 2-D latent space, this model has q = {}",
+                self.q()
+            )));
+        }
+        if width == 0 || height == 0 || width > 16384 || height > 16384 {
+            return Err(CoreError::BadQuery(format!(
+                "map size {width}x{height} must be between 1 and 16384 a side"
+            )));
+        }
+        view.check()?;
+        let kernel = self.file().kernel;
+        let latent = self.latent();
+        let n = latent.nrows();
+        let points: Vec<[f64; 2]> = (0..n).map(|i| [latent[(i, 0)], latent[(i, 1)]]).collect();
+        let kvec = |p: [f64; 2], out: &mut [f64]| {
+            for (o, xi) in out.iter_mut().zip(&points) {
+                *o = kernel.eval(xi, &p);
+            }
+        };
+        let mut rgb = vec![[0.0f32; 3]; width * height];
+        progress.start("map", height as u64);
+        let method = match samples {
+            None => {
+                if !self.file().transform.is_linear() {
+                    return Err(CoreError::BadQuery(format!(
+                        "the {} transform is not linear: give a quadrature sample count",
+                        self.file().transform.name()
+                    )));
+                }
+                let rule = Quadrature::dense(self.dims(), 2);
+                let (a, m) = self.material_albedos(&rule);
+                let b = self.llt_solve(&Mat::from_fn(n, 3, |i, c| a[i][c]));
+                rgb.par_chunks_mut(width).enumerate().for_each(|(py, row)| {
+                    let mut k = vec![0.0; n];
+                    for (px, out) in row.iter_mut().enumerate() {
+                        kvec(
+                            view.pixel_to_latent(px as f64, py as f64, width, height),
+                            &mut k,
+                        );
+                        for c in 0..3 {
+                            let s: f64 = (0..n).map(|i| k[i] * b[(i, c)]).sum();
+                            out[c] = (m[c] + s) as f32;
+                        }
+                    }
+                    progress.advance(1);
+                });
+                AlbedoMethod::Linear
+            }
+            Some(s) => {
+                let rule = Quadrature::with_samples(self.dims(), s.max(1));
+                let store = self.store();
+                let bins = store.dims().bins();
+                // The rows the rule reads (measured ones only), their weights and channels.
+                let mut rows = Vec::new();
+                for (&b, &w) in rule.bins().iter().zip(rule.weights()) {
+                    for c in 0..3 {
+                        let row = c * bins + b as usize;
+                        if store.unmeasured()[row] == 0 {
+                            rows.push((row, b as usize, c, w));
+                        }
+                    }
+                }
+                let r = rows.len();
+                let zq = Mat::from_fn(n, r, |i, j| match store.z() {
+                    Rows::F32(z) => z[rows[j].0 * n + i] as f64,
+                    Rows::F64(z) => z[rows[j].0 * n + i],
+                });
+                // C^T = K^-1 Z_q^T, so that values = mean + C k(x).
+                let ct = self.llt_solve(&zq);
+                let c = ct.transpose().to_owned();
+                let mean: Vec<f64> = rows.iter().map(|&(row, ..)| store.mean()[row]).collect();
+                let t = &self.transform;
+                rgb.par_chunks_mut(width).enumerate().for_each(|(py, out)| {
+                    let kx = Mat::from_fn(n, width, |i, px| {
+                        kernel.eval(
+                            &points[i],
+                            &view.pixel_to_latent(px as f64, py as f64, width, height),
+                        )
+                    });
+                    let mut v = Mat::<f64>::zeros(r, width);
+                    matmul(
+                        v.as_mut(),
+                        Accum::Replace,
+                        c.as_ref(),
+                        kx.as_ref(),
+                        1.0,
+                        Par::Seq,
+                    );
+                    for (px, o) in out.iter_mut().enumerate() {
+                        let mut acc = [0.0f64; 3];
+                        for (j, &(_, bin, ch, w)) in rows.iter().enumerate() {
+                            acc[ch] += w * t.inverse(bin, mean[j] + v[(j, px)]);
+                        }
+                        *o = acc.map(|a| a as f32);
+                    }
+                    progress.advance(1);
+                });
+                AlbedoMethod::Quadrature {
+                    samples: s,
+                    bins: rule.len(),
+                }
+            }
+        };
+        progress.finish();
+        Ok(AlbedoMap {
+            width,
+            height,
+            view,
+            rgb,
+            method,
+        })
+    }
+}
+
+/// A contour segment in pixel coordinates, and its level index.
+pub type Segment = ([f32; 2], [f32; 2], usize);
+
+/// Marching squares on the luminance of `map` at `levels` (pixel centres
+/// are grid nodes). Returns the segments of every level.
+pub fn contours(map: &AlbedoMap, levels: &[f32]) -> Vec<Segment> {
+    let (w, h) = (map.width, map.height);
+    let lum: Vec<f32> = map.rgb.iter().map(|c| luminance(*c)).collect();
+    let mut out = Vec::new();
+    if w < 2 || h < 2 {
+        return out;
+    }
+    for (li, &level) in levels.iter().enumerate() {
+        for y in 0..h - 1 {
+            for x in 0..w - 1 {
+                // Corners: 0 top-left, 1 top-right, 2 bottom-right, 3 bottom-left.
+                let v = [
+                    lum[y * w + x],
+                    lum[y * w + x + 1],
+                    lum[(y + 1) * w + x + 1],
+                    lum[(y + 1) * w + x],
+                ];
+                let p = [
+                    [x as f32, y as f32],
+                    [x as f32 + 1.0, y as f32],
+                    [x as f32 + 1.0, y as f32 + 1.0],
+                    [x as f32, y as f32 + 1.0],
+                ];
+                let above: Vec<bool> = v.iter().map(|&a| a >= level).collect();
+                // Crossing points on the four edges (edge k joins corner k and k+1).
+                let cross = |k: usize| -> Option<[f32; 2]> {
+                    let (a, b) = (k, (k + 1) % 4);
+                    if above[a] == above[b] {
+                        return None;
+                    }
+                    let t = (level - v[a]) / (v[b] - v[a]);
+                    Some([
+                        p[a][0] + t * (p[b][0] - p[a][0]) + 0.5,
+                        p[a][1] + t * (p[b][1] - p[a][1]) + 0.5,
+                    ])
+                };
+                let pts: Vec<[f32; 2]> = (0..4).filter_map(cross).collect();
+                match pts.len() {
+                    2 => out.push((pts[0], pts[1], li)),
+                    4 => {
+                        // Saddle: decide by the centre value.
+                        let centre = v.iter().sum::<f32>() / 4.0;
+                        if (centre >= level) == above[0] {
+                            out.push((pts[0], pts[3], li));
+                            out.push((pts[1], pts[2], li));
+                        } else {
+                            out.push((pts[0], pts[1], li));
+                            out.push((pts[2], pts[3], li));
+                        }
+                    }
+                    _ => {}
+                }
+            }
+        }
+    }
+    out
+}
+
+/// `count` levels evenly spaced strictly inside the luminance range of `map`.
+pub fn contour_levels(map: &AlbedoMap, count: usize) -> Vec<f32> {
+    let (lo, hi) = map
+        .rgb
+        .iter()
+        .map(|c| luminance(*c))
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), l| {
+            (a.min(l), b.max(l))
+        });
+    if !(lo.is_finite() && hi.is_finite() && hi > lo) {
+        return Vec::new();
+    }
+    (1..=count)
+        .map(|k| lo + (hi - lo) * k as f32 / (count + 1) as f32)
+        .collect()
+}
