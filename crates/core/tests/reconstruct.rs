@@ -217,10 +217,10 @@ fn linear_map_equals_quadrature_of_the_reconstruction() {
             .unwrap();
         let want = rule.integrate(|bin| [0, 1, 2].map(|c| b.value(c, bin).unwrap_or(0.0)));
         let scale = want.iter().fold(1e-3f64, |a, v| a.max(v.abs()));
-        for c in 0..3 {
-            err_fine = err_fine.max((fine.rgb[py * w + px][c] as f64 - want[c]).abs() / scale);
-            err_coarse =
-                err_coarse.max((coarse.rgb[py * w + px][c] as f64 - want[c]).abs() / scale);
+        let (f, k) = (fine.rgb[py * w + px], coarse.rgb[py * w + px]);
+        for ((fc, kc), wc) in f.iter().zip(k).zip(want) {
+            err_fine = err_fine.max((*fc as f64 - wc).abs() / scale);
+            err_coarse = err_coarse.max((kc as f64 - wc).abs() / scale);
         }
     }
     assert!(err_fine < 0.02, "{err_fine}");
