@@ -100,13 +100,15 @@ fn open(path: &Path) -> Result<MerlFile, Error> {
 }
 
 /// Run `info`: the table on stdout, a warning for dims other than MERL's,
-/// one `error:` line per unreadable file on stderr, status 1 if there was any.
+/// one `error:` line per unreadable file on stderr, status 1 if there was any
+/// (even when stdout was closed early).
 pub fn run(paths: &[PathBuf]) -> Result<ExitCode, Error> {
     let results = summarise(paths);
     let good: Vec<&Summary> = results.iter().filter_map(|r| r.as_ref().ok()).collect();
-    if !good.is_empty() {
-        write_table(&mut io::stdout().lock(), &good)?;
-    }
+    let report = match good.is_empty() {
+        true => Ok(()),
+        false => write_table(&mut io::stdout().lock(), &good).map_err(Error::from),
+    };
     let odd: Vec<&&Summary> = good.iter().filter(|s| s.dims != Dims::MERL).collect();
     match odd[..] {
         [] => {}
@@ -130,11 +132,17 @@ pub fn run(paths: &[PathBuf]) -> Result<ExitCode, Error> {
         eprintln!("error: {e}");
         failed = true;
     }
-    Ok(if failed {
-        ExitCode::FAILURE
-    } else {
-        ExitCode::SUCCESS
-    })
+    match report {
+        Ok(()) if !failed => Ok(ExitCode::SUCCESS),
+        Err(e) if !failed => Err(e),
+        Ok(()) => Ok(ExitCode::FAILURE),
+        Err(e) => {
+            if !e.is_broken_pipe() {
+                eprintln!("error: {e}");
+            }
+            Ok(ExitCode::FAILURE)
+        }
+    }
 }
 
 /// The full report: one row per channel, the file and its dims on the first.

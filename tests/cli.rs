@@ -4,7 +4,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{brdf_atlas, reported, texts};
+use common::{binaries, brdf_atlas, reported, texts};
 
 /// The 12-byte header of dims `a x b x c`.
 fn header(a: i32, b: i32, c: i32) -> Vec<u8> {
@@ -23,16 +23,6 @@ fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
     let path = dir.join(name);
     std::fs::write(&path, bytes).unwrap();
     path
-}
-
-fn binaries(dir: &Path) -> Vec<PathBuf> {
-    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "binary"))
-        .collect();
-    files.sort();
-    files
 }
 
 #[test]

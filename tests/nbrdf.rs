@@ -5,9 +5,9 @@
 
 mod common;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use common::{brdf_atlas, header_dims, reported, texts};
+use common::{binaries, brdf_atlas, header_dims, reported, texts};
 
 #[test]
 fn info_reports_every_nbrdf_material() {
@@ -15,17 +15,7 @@ fn info_reports_every_nbrdf_material() {
         println!("skipped: BRDF_ATLAS_NBRDF_DIR not set");
         return;
     };
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .unwrap_or_else(|e| {
-            panic!(
-                "BRDF_ATLAS_NBRDF_DIR={}: {e}",
-                PathBuf::from(&dir).display()
-            )
-        })
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "binary"))
-        .collect();
-    files.sort();
+    let files = binaries(Path::new(&dir));
     assert!(
         !files.is_empty(),
         "BRDF_ATLAS_NBRDF_DIR={} holds no .binary files",

@@ -1,7 +1,7 @@
 //! Helpers shared by the end-to-end tests: run the real binary, read its report.
 #![allow(dead_code)] // each test file uses its own subset
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// Run `brdf-atlas` with `args`, capturing everything.
@@ -80,4 +80,15 @@ pub fn header_dims(path: &Path) -> String {
     let bytes = std::fs::read(path).expect("readable");
     let d = |k: usize| i32::from_le_bytes(bytes[4 * k..4 * k + 4].try_into().unwrap());
     format!("{}x{}x{}", d(0), d(1), d(2))
+}
+
+/// The `.binary` files in `dir`, sorted.
+pub fn binaries(dir: &Path) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "binary"))
+        .collect();
+    files.sort();
+    files
 }
