@@ -1,4 +1,4 @@
-//! `brdf-atlas demo`: the whole pipeline on the embedded synthetic database,
+//! `brdf-atlas demo`: the tool at work on its embedded synthetic database,
 //! as a list of steps run in order. Each step reads what earlier steps left
 //! in [`State`] and adds its own results; growing the demo is adding a step.
 

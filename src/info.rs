@@ -105,9 +105,10 @@ fn open(path: &Path) -> Result<MerlFile, Error> {
 pub fn run(paths: &[PathBuf]) -> Result<ExitCode, Error> {
     let results = summarise(paths);
     let good: Vec<&Summary> = results.iter().filter_map(|r| r.as_ref().ok()).collect();
-    let report = match good.is_empty() {
-        true => Ok(()),
-        false => write_table(&mut io::stdout().lock(), &good).map_err(Error::from),
+    let report = if good.is_empty() {
+        Ok(())
+    } else {
+        write_table(&mut io::stdout().lock(), &good).map_err(Error::from)
     };
     let odd: Vec<&&Summary> = good.iter().filter(|s| s.dims != Dims::MERL).collect();
     match odd[..] {
