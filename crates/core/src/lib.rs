@@ -9,6 +9,7 @@
 #![warn(missing_docs)]
 
 pub mod error;
+pub mod fastexp;
 pub mod gplvm;
 pub mod incremental;
 pub mod kernel;
@@ -19,6 +20,7 @@ pub mod model;
 pub mod optim;
 pub mod pca;
 pub mod reconstruct;
+pub mod render;
 pub mod store;
 pub mod transform;
 

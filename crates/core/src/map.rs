@@ -22,8 +22,10 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Progress, Result};
+use crate::fastexp;
 use crate::model::Model;
 use crate::store::Rows;
+use crate::transform::InverseForm;
 
 /// A window of the latent plane: `x` in `[x0, x1]`, `y` in `[y0, y1]`, y up.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -190,9 +192,13 @@ impl Model {
         let latent = self.latent();
         let n = latent.nrows();
         let points: Vec<[f64; 2]> = (0..n).map(|i| [latent[(i, 0)], latent[(i, 1)]]).collect();
+        let (xs, ys): (Vec<f64>, Vec<f64>) = points.iter().map(|p| (p[0], p[1])).unzip();
+        let inv2l2 = 1.0 / (2.0 * kernel.length_scale * kernel.length_scale);
+        // k(p) for all materials: a loop the compiler vectorises (fastexp).
         let kvec = |p: [f64; 2], out: &mut [f64]| {
-            for (o, xi) in out.iter_mut().zip(&points) {
-                *o = kernel.eval(xi, &p);
+            for ((o, x), y) in out.iter_mut().zip(&xs).zip(&ys) {
+                let r2 = (x - p[0]) * (x - p[0]) + (y - p[1]) * (y - p[1]);
+                *o = fastexp::exp(-r2 * inv2l2);
             }
         };
         let mut rgb = vec![[0.0f32; 3]; width * height];
@@ -208,6 +214,9 @@ impl Model {
                 let rule = Quadrature::dense(self.dims(), 2);
                 let (a, m) = self.material_albedos(&rule);
                 let b = self.llt_solve(&Mat::from_fn(n, 3, |i, c| a[i][c]));
+                let cols: Vec<Vec<f64>> = (0..3)
+                    .map(|c| (0..n).map(|i| b[(i, c)]).collect())
+                    .collect();
                 rgb.par_chunks_mut(width).enumerate().for_each(|(py, row)| {
                     let mut k = vec![0.0; n];
                     for (px, out) in row.iter_mut().enumerate() {
@@ -215,9 +224,9 @@ impl Model {
                             view.pixel_to_latent(px as f64, py as f64, width, height),
                             &mut k,
                         );
-                        for c in 0..3 {
-                            let s: f64 = (0..n).map(|i| k[i] * b[(i, c)]).sum();
-                            out[c] = (m[c] + s) as f32;
+                        for (o, (col, mc)) in out.iter_mut().zip(cols.iter().zip(m)) {
+                            let s: f64 = k.iter().zip(col).map(|(a, b)| a * b).sum();
+                            *o = (mc + s) as f32;
                         }
                     }
                     progress.advance(1);
@@ -228,48 +237,67 @@ impl Model {
                 let rule = Quadrature::with_samples(self.dims(), s.max(1));
                 let store = self.store();
                 let bins = store.dims().bins();
-                // The rows the rule reads (measured ones only), their weights and channels.
+                // The rows the rule reads (measured ones only), grouped by channel,
+                // with the quadrature weight folded into the inverse's scale.
                 let mut rows = Vec::new();
-                for (&b, &w) in rule.bins().iter().zip(rule.weights()) {
-                    for c in 0..3 {
+                let mut exponential = false;
+                for c in 0..3 {
+                    for (&b, &w) in rule.bins().iter().zip(rule.weights()) {
                         let row = c * bins + b as usize;
                         if store.unmeasured()[row] == 0 {
-                            rows.push((row, b as usize, c, w));
+                            let scale = match self.transform.inverse_form(b as usize) {
+                                InverseForm::Linear(s) => s,
+                                InverseForm::Exp(s) => {
+                                    exponential = true;
+                                    s
+                                }
+                            };
+                            rows.push((row, c, w * scale));
                         }
                     }
                 }
                 let r = rows.len();
+                let ends: Vec<usize> = (0..3)
+                    .map(|c| rows.iter().filter(|x| x.1 <= c).count())
+                    .collect();
                 let zq = Mat::from_fn(n, r, |i, j| match store.z() {
                     Rows::F32(z) => z[rows[j].0 * n + i] as f64,
                     Rows::F64(z) => z[rows[j].0 * n + i],
                 });
-                // C^T = K^-1 Z_q^T, so that values = mean + C k(x).
-                let ct = self.llt_solve(&zq);
-                let c = ct.transpose().to_owned();
+                // C^T = K^-1 Z_q^T, so that the values at x are mean + C k(x).
+                let c = self.llt_solve(&zq).transpose().to_owned();
                 let mean: Vec<f64> = rows.iter().map(|&(row, ..)| store.mean()[row]).collect();
-                let t = &self.transform;
+                let weight: Vec<f64> = rows.iter().map(|x| x.2).collect();
                 rgb.par_chunks_mut(width).enumerate().for_each(|(py, out)| {
-                    let kx = Mat::from_fn(n, width, |i, px| {
-                        kernel.eval(
-                            &points[i],
-                            &view.pixel_to_latent(px as f64, py as f64, width, height),
-                        )
-                    });
-                    let mut v = Mat::<f64>::zeros(r, width);
-                    matmul(
-                        v.as_mut(),
-                        Accum::Replace,
-                        c.as_ref(),
-                        kx.as_ref(),
-                        1.0,
-                        Par::Seq,
-                    );
+                    let mut kx = Mat::<f64>::zeros(n, width);
+                    let mut k = vec![0.0; n];
+                    for px in 0..width {
+                        kvec(
+                            view.pixel_to_latent(px as f64, py as f64, width, height),
+                            &mut k,
+                        );
+                        k.iter().enumerate().for_each(|(i, v)| kx[(i, px)] = *v);
+                    }
+                    let mut vbuf = vec![0.0f64; r * width];
+                    let v = faer::MatMut::from_column_major_slice_mut(&mut vbuf, r, width);
+                    matmul(v, Accum::Replace, c.as_ref(), kx.as_ref(), 1.0, Par::Seq);
+                    let mut terms = vec![0.0f64; r];
                     for (px, o) in out.iter_mut().enumerate() {
-                        let mut acc = [0.0f64; 3];
-                        for (j, &(_, bin, ch, w)) in rows.iter().enumerate() {
-                            acc[ch] += w * t.inverse(bin, mean[j] + v[(j, px)]);
+                        let col = &vbuf[px * r..(px + 1) * r];
+                        // Element-wise first (vectorises), then a fixed-order sum.
+                        let it = terms.iter_mut().zip(&mean).zip(&weight).zip(col);
+                        if exponential {
+                            it.for_each(|(((o, m), w), t)| {
+                                *o = w * (fastexp::exp(m + t) - 1.0).max(0.0)
+                            });
+                        } else {
+                            it.for_each(|(((o, m), w), t)| *o = w * (m + t).max(0.0));
                         }
-                        *o = acc.map(|a| a as f32);
+                        let mut start = 0;
+                        for (ch, &end) in ends.iter().enumerate() {
+                            o[ch] = sum4(&terms[start..end]) as f32;
+                            start = end;
+                        }
                     }
                     progress.advance(1);
                 });
@@ -288,6 +316,19 @@ impl Model {
             method,
         })
     }
+}
+
+/// Sum with four interleaved partial sums: vectorisable, and the same bits every time.
+fn sum4(v: &[f64]) -> f64 {
+    let mut acc = [0.0f64; 4];
+    let chunks = v.chunks_exact(4);
+    let rest: f64 = chunks.remainder().iter().sum();
+    for c in chunks {
+        for k in 0..4 {
+            acc[k] += c[k];
+        }
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + rest
 }
 
 /// A contour segment in pixel coordinates, and its level index.

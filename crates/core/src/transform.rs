@@ -60,6 +60,10 @@ pub trait Transform: Send + Sync {
     /// Latent-space value -> reflectance, clamped to `>= 0`.
     fn inverse(&self, bin: usize, t: f64) -> f64;
 
+    /// The inverse at `bin` as a formula, so bulk code can invert without a
+    /// call per value: `max(0, scale * t)` or `max(0, scale * (e^t - 1))`.
+    fn inverse_form(&self, bin: usize) -> InverseForm;
+
     /// Transform a run of raw MERL file values of `channel`, bins
     /// `bin0 .. bin0 + raw.len()`, into `out`: the hot loop of a store build.
     fn forward_raw_run(&self, channel: usize, bin0: usize, raw: &[f64], out: &mut [f64]) {
@@ -67,6 +71,15 @@ pub trait Transform: Send + Sync {
             *o = self.forward(bin0 + k, (!is_invalid(v)).then(|| physical(channel, v)));
         }
     }
+}
+
+/// The inverse transform of one bin, as a formula (see [`Transform::inverse_form`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum InverseForm {
+    /// `max(0, scale * t)`.
+    Linear(f64),
+    /// `max(0, scale * (e^t - 1))`.
+    Exp(f64),
 }
 
 /// The identity on reflectance.
@@ -80,6 +93,10 @@ impl Transform for Raw {
     #[inline]
     fn inverse(&self, _bin: usize, t: f64) -> f64 {
         t.max(0.0)
+    }
+
+    fn inverse_form(&self, _bin: usize) -> InverseForm {
+        InverseForm::Linear(1.0)
     }
 
     fn forward_raw_run(&self, channel: usize, _bin0: usize, raw: &[f64], out: &mut [f64]) {
@@ -125,6 +142,11 @@ impl Transform for CosineLog {
             (t.exp_m1() / c).max(0.0)
         }
     }
+
+    fn inverse_form(&self, bin: usize) -> InverseForm {
+        let c = self.cos[bin];
+        InverseForm::Exp(if c < MIN_COS { 0.0 } else { 1.0 / c })
+    }
 }
 
 #[cfg(test)]
@@ -149,6 +171,13 @@ mod tests {
                     );
                 }
                 assert_eq!(t.forward(bin, None), 0.0);
+                for tv in [-0.3, 0.0, 0.7, 4.0] {
+                    let via_form = match t.inverse_form(bin) {
+                        InverseForm::Linear(s) => (s * tv).max(0.0),
+                        InverseForm::Exp(s) => (s * tv.exp_m1()).max(0.0),
+                    };
+                    assert!((via_form - t.inverse(bin, tv)).abs() <= 1e-14 * via_form.max(1.0));
+                }
                 assert_eq!(t.inverse(bin, -5.0), 0.0);
             }
         }

@@ -1,0 +1,18 @@
+//! Render a model's albedo map:
+//! `cargo run --release -p brdf-atlas-core --example map_model -- MODEL OUT.png [SIZE] [SAMPLES]`.
+
+use brdf_atlas_core::map::View;
+use brdf_atlas_core::render::{Picture, write_png};
+use brdf_atlas_core::{Model, NoProgress};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let model = Model::open(&args[1])?;
+    let size: usize = args.get(3).map_or(Ok(512), |s| s.parse())?;
+    let samples: Option<usize> = args.get(4).map(|s| s.parse()).transpose()?;
+    let t = std::time::Instant::now();
+    let map = model.albedo_map(size, size, View::default(), samples, &NoProgress)?;
+    println!("map {:?}", t.elapsed());
+    write_png(args[2].as_ref(), &Picture::new(&model, map, 12), true)?;
+    Ok(())
+}
