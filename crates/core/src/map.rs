@@ -27,6 +27,10 @@ use crate::model::Model;
 use crate::store::Rows;
 use crate::transform::InverseForm;
 
+/// Quadrature samples per pixel when a map needs them (non-linear transforms)
+/// and the caller gives none; see the README's figures for what it buys.
+pub const DEFAULT_SAMPLES: usize = 256;
+
 /// A window of the latent plane: `x` in `[x0, x1]`, `y` in `[y0, y1]`, y up.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct View {
