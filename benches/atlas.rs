@@ -1,0 +1,122 @@
+//! Benchmarks of the fitted model: optimisation on a real Gram matrix,
+//! full reconstruction, point queries and albedo maps.
+//!
+//! Data: the directory named by `BRDF_ATLAS_NBRDF_DIR` (MERL files, e.g.
+//! the 100 NBRDF-derived materials from `../shared/tools/nbrdf-to-merl`),
+//! or else 16 synthetic materials at 90 x 90 x 180. The models are fitted
+//! once before timing starts. Run with `cargo bench --bench atlas`.
+
+use std::hint::black_box;
+use std::path::{Path, PathBuf};
+
+use brdf_atlas_core::map::View;
+use brdf_atlas_core::model::{FitOptions, fit_dir};
+use brdf_atlas_core::{
+    GplvmParams, GramData, Model, NoProgress, OptimizerKind, Precision, TransformKind,
+};
+use brdf_merl::synth::database;
+use brdf_merl::{Dims, angles::direction};
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+
+fn data_dir(tmp: &Path) -> PathBuf {
+    if let Some(dir) = std::env::var_os("BRDF_ATLAS_NBRDF_DIR") {
+        return PathBuf::from(dir);
+    }
+    let dir = tmp.join("merl");
+    std::fs::create_dir_all(&dir).expect("temporary directory");
+    for m in database(16, 1) {
+        m.brdf
+            .table(Dims::MERL)
+            .write(dir.join(format!("{}.binary", m.name)))
+            .expect("write input");
+    }
+    dir
+}
+
+fn fit(data: &Path, out: &Path, transform: TransformKind) -> Model {
+    let options = FitOptions {
+        params: GplvmParams::new(2).check().expect("defaults"),
+        transform,
+        precision: Precision::F32,
+    };
+    fit_dir(data, out, &options, &NoProgress).expect("fit");
+    Model::open(out).expect("open model")
+}
+
+fn atlas(c: &mut Criterion) {
+    let tmp = tempfile::tempdir().expect("temporary directory");
+    let data = data_dir(tmp.path());
+    let raw = fit(&data, &tmp.path().join("raw.atlas"), TransformKind::Raw);
+    let log = fit(&data, &tmp.path().join("log.atlas"), TransformKind::Log);
+
+    let mut g = c.benchmark_group("optimise");
+    g.sample_size(10);
+    for (name, model) in [("raw", &raw), ("log", &log)] {
+        let gram = GramData::new(model.gram().clone(), model.store().rows()).expect("gram");
+        for kind in [OptimizerKind::HookeJeeves, OptimizerKind::Lbfgs] {
+            let params = GplvmParams::new(2)
+                .optimizer(kind)
+                .check()
+                .expect("defaults");
+            g.bench_function(BenchmarkId::new(kind.name(), name), |b| {
+                b.iter(|| params.fit(black_box(&gram), &NoProgress).expect("fit"))
+            });
+        }
+    }
+    g.finish();
+
+    let mut g = c.benchmark_group("reconstruct");
+    g.sample_size(10);
+    let x = [0.1, -0.2];
+    g.bench_function("full_table_log", |b| {
+        b.iter(|| log.at(black_box(&x)).expect("point").table())
+    });
+    let blend = log.at(&x).expect("point");
+    let bins = log.dims().bins();
+    let count = 100_000;
+    g.throughput(Throughput::Elements(count as u64));
+    g.bench_function("point_bins_log", |b| {
+        b.iter(|| {
+            let mut s = 0.0;
+            for k in 0..count {
+                if let Some(v) = blend.rgb((k * 7919) % bins) {
+                    s += v[0];
+                }
+            }
+            s
+        })
+    });
+    let pairs: Vec<_> = (0..count)
+        .map(|k| {
+            (
+                direction(0.3 + (k % 50) as f64 * 0.02, 0.0),
+                direction(0.5, 1.0 + (k % 97) as f64 * 0.05),
+            )
+        })
+        .collect();
+    g.bench_function("eval_directions_log", |b| {
+        b.iter(|| blend.eval_batch(black_box(&pairs)))
+    });
+    g.finish();
+
+    let mut g = c.benchmark_group("map");
+    g.sample_size(10);
+    g.bench_function("raw_linear_1024", |b| {
+        b.iter(|| {
+            raw.albedo_map(1024, 1024, View::default(), None, &NoProgress)
+                .expect("map")
+        })
+    });
+    for samples in [64usize, 256, 1024] {
+        g.bench_function(BenchmarkId::new("log_quadrature_256", samples), |b| {
+            b.iter(|| {
+                log.albedo_map(256, 256, View::default(), Some(samples), &NoProgress)
+                    .expect("map")
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, atlas);
+criterion_main!(benches);
