@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use brdf_atlas_core::CoreError;
 use brdf_merl::MerlError;
 
 /// Everything a command can fail with.
@@ -11,6 +12,21 @@ pub enum Error {
     /// Reading, validating or writing a MERL file failed.
     #[error(transparent)]
     Merl(#[from] MerlError),
+    /// Building, fitting, opening or querying a model failed.
+    #[error(transparent)]
+    Core(#[from] CoreError),
+    /// Input the command cannot use: the message names the file or option
+    /// and what was expected.
+    #[error("{0}")]
+    Input(String),
+    /// Reading an input file other than a MERL table failed.
+    #[error("{}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// What the OS said.
+        source: std::io::Error,
+    },
     /// A path given as a MERL file is a directory.
     #[error("{}: is a directory, expected a MERL .binary file", path.display())]
     IsDirectory {

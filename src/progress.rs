@@ -25,3 +25,67 @@ pub fn spinner(message: impl Into<String>) -> ProgressBar {
     pb.enable_steady_tick(std::time::Duration::from_millis(120));
     pb
 }
+
+/// The core library's long work ([`brdf_atlas_core::Progress`]: building the
+/// store, optimising, drawing a map) shown as one bar per phase.
+///
+/// The library calls `advance` from worker threads; the current bar sits
+/// behind a mutex that `start` swaps, and indicatif itself is thread-safe.
+/// Before the first phase starts a spinner with `waiting` shows that
+/// something is happening (a fit first opens every input file).
+pub struct Bars {
+    current: std::sync::Mutex<ProgressBar>,
+}
+
+impl Bars {
+    /// Bars for one command; `waiting` is shown until the first phase starts.
+    pub fn new(waiting: impl Into<String>) -> Bars {
+        Bars {
+            current: std::sync::Mutex::new(spinner(waiting)),
+        }
+    }
+
+    fn with_bar(&self, f: impl FnOnce(&mut ProgressBar)) {
+        // A panic elsewhere while the lock was held poisons it; progress is
+        // cosmetic, so carry on with the bar as it is.
+        let mut guard = self
+            .current
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        f(&mut guard);
+    }
+}
+
+/// What the user reads for each phase label of the core library.
+fn phase_message(label: &str) -> &'static str {
+    match label {
+        "store" => "store+Gram",
+        "gram" => "Gram",
+        "optimise" => "optimising",
+        "map" => "map rows",
+        _ => "working",
+    }
+}
+
+impl brdf_atlas_core::Progress for Bars {
+    fn start(&self, label: &str, total: u64) {
+        self.with_bar(|pb| {
+            pb.finish_and_clear();
+            *pb = bar(total as usize, phase_message(label));
+        });
+    }
+
+    fn advance(&self, delta: u64) {
+        self.with_bar(|pb| pb.inc(delta));
+    }
+
+    fn finish(&self) {
+        self.with_bar(|pb| pb.finish_and_clear());
+    }
+}
+
+impl Drop for Bars {
+    fn drop(&mut self) {
+        self.with_bar(|pb| pb.finish_and_clear());
+    }
+}

@@ -1,0 +1,147 @@
+//! `brdf-atlas eval`: RGB reflectance of the material at a latent point for
+//! given pairs of directions, without building its table.
+
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use brdf_atlas_core::Model;
+
+use crate::coords::{Angles, Point};
+use crate::error::Error;
+
+/// Which model, where in it, and which direction pairs.
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// Model file.
+    pub model: PathBuf,
+    /// Latent point.
+    pub at: Point,
+    /// Incident direction (with `wo`).
+    pub wi: Option<Angles>,
+    /// Outgoing directions, each paired with `wi`.
+    pub wo: Vec<Angles>,
+    /// A file of `theta_i phi_i theta_o phi_o` lines instead.
+    pub batch: Option<PathBuf>,
+}
+
+/// What every bad batch line is told.
+const BATCH_EXPECTED: &str = "expected four angles in degrees: theta_i phi_i theta_o phi_o";
+
+/// Read a batch file: one pair a line, `theta_i phi_i theta_o phi_o` in
+/// degrees, separated by blanks; empty lines and `#` comments are skipped.
+pub fn read_batch(path: &Path) -> Result<Vec<(Angles, Angles)>, Error> {
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let mut pairs = Vec::new();
+    for (k, line) in text.lines().enumerate() {
+        let line = line.split('#').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        let values: Option<Vec<f64>> = line
+            .split_whitespace()
+            .map(|s| s.parse::<f64>().ok().filter(|v| v.is_finite()))
+            .collect();
+        match values.as_deref() {
+            Some(&[ti, pi, to, po]) => {
+                pairs.push((Angles { theta: ti, phi: pi }, Angles { theta: to, phi: po }))
+            }
+            _ => {
+                return Err(Error::Input(format!(
+                    "{}:{}: {BATCH_EXPECTED}, got {line:?}",
+                    path.display(),
+                    k + 1
+                )));
+            }
+        }
+    }
+    if pairs.is_empty() {
+        return Err(Error::Input(format!(
+            "{}: no direction pairs ({BATCH_EXPECTED}, one pair a line)",
+            path.display()
+        )));
+    }
+    Ok(pairs)
+}
+
+/// Run `eval`: one row per pair, reflectance or why there is none.
+pub fn run(options: &Options) -> Result<ExitCode, Error> {
+    let pairs: Vec<(Angles, Angles)> = match (&options.batch, options.wi) {
+        (Some(path), _) => read_batch(path)?,
+        (None, Some(wi)) => options.wo.iter().map(|&wo| (wi, wo)).collect(),
+        (None, None) => {
+            return Err(Error::Input(
+                "eval needs --wi and --wo, or --batch FILE".into(),
+            ));
+        }
+    };
+    let model = Model::open(&options.model)?;
+    let x = options.at.check(model.q(), &options.model)?;
+    let blend = model.at(x)?;
+    let directions: Vec<_> = pairs
+        .iter()
+        .map(|(wi, wo)| (wi.direction(), wo.direction()))
+        .collect();
+    let values = blend.eval_batch(&directions);
+    let mut out = io::stdout().lock();
+    writeln!(
+        out,
+        "{} at {}: RGB reflectance (1/sr)",
+        options.model.display(),
+        Point::show(x)
+    )?;
+    writeln!(
+        out,
+        "{:>8} {:>8} {:>8} {:>8}  {:>16} {:>16} {:>16}",
+        "THETA_I", "PHI_I", "THETA_O", "PHI_O", "R", "G", "B"
+    )?;
+    for ((wi, wo), value) in pairs.iter().zip(values) {
+        write!(
+            out,
+            "{:>8} {:>8} {:>8} {:>8}  ",
+            wi.theta, wi.phi, wo.theta, wo.phi
+        )?;
+        match value {
+            Some([r, g, b]) => writeln!(out, "{r:>16.9e} {g:>16.9e} {b:>16.9e}")?,
+            None => writeln!(out, "below horizon / unmeasured")?,
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn batch_files_name_the_bad_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("pairs.txt");
+        std::fs::write(&path, "# wi wo\n30 0 30 180\n\n10 20 30 40 # ok\n").unwrap();
+        let pairs = read_batch(&path).unwrap();
+        assert_eq!(pairs.len(), 2);
+        assert_eq!(
+            pairs[1].1,
+            Angles {
+                theta: 30.0,
+                phi: 40.0
+            }
+        );
+        std::fs::write(&path, "30 0 30 180\n30 0 30\n").unwrap();
+        let e = read_batch(&path).unwrap_err().to_string();
+        assert!(
+            e.contains("pairs.txt:2:") && e.contains(BATCH_EXPECTED),
+            "{e}"
+        );
+        std::fs::write(&path, "# nothing\n").unwrap();
+        let e = read_batch(&path).unwrap_err().to_string();
+        assert!(e.contains("no direction pairs"), "{e}");
+        let e = read_batch(&dir.path().join("missing.txt"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("missing.txt"), "{e}");
+    }
+}

@@ -1,0 +1,69 @@
+//! `brdf-atlas locate`: where new materials land in a fitted latent space.
+
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use brdf_atlas_core::Model;
+use brdf_atlas_core::locate::Located;
+use brdf_merl::MerlFile;
+
+use crate::coords::Point;
+use crate::error::Error;
+
+/// Locate one MERL file in `model`.
+pub fn locate(model: &Model, path: &Path) -> Result<Located, Error> {
+    if path.is_dir() {
+        return Err(Error::IsDirectory {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(model.locate(&MerlFile::open(path)?)?)
+}
+
+/// One file's report: point, error against scale, nearest inputs.
+pub fn write_located(
+    out: &mut impl Write,
+    model: &Model,
+    path: &Path,
+    l: &Located,
+) -> io::Result<()> {
+    writeln!(out, "{}: at {}", path.display(), Point::show(&l.point))?;
+    writeln!(
+        out,
+        "  rmse {:.4e}, spread {:.4e}, rmse/spread {:.4} (transformed space; 1 is no better than the mean material)",
+        l.rmse,
+        l.spread,
+        l.rmse / l.spread.max(f64::MIN_POSITIVE)
+    )?;
+    let nearest: Vec<String> = l
+        .nearest
+        .iter()
+        .take(3)
+        .map(|&(i, d)| format!("{} ({d:.4})", model.names()[i]))
+        .collect();
+    writeln!(out, "  nearest  {}", nearest.join(", "))
+}
+
+/// Run `locate`: a report per readable file, one `error:` line per other
+/// file, status 1 if there was any.
+pub fn run(model_path: &Path, files: &[PathBuf]) -> Result<ExitCode, Error> {
+    let model = Model::open(model_path)?;
+    let mut failed = false;
+    let mut out = io::stdout().lock();
+    for path in files {
+        match locate(&model, path) {
+            Ok(l) => write_located(&mut out, &model, path, &l)?,
+            Err(e) => {
+                out.flush()?;
+                eprintln!("error: {e}");
+                failed = true;
+            }
+        }
+    }
+    Ok(if failed {
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
+    })
+}
