@@ -276,10 +276,10 @@ fn constant_table_albedo_is_pi_times_the_value() {
 }
 
 #[test]
-fn demo_synthesises_and_summarises() {
+fn demo_synthesises_summarises_fits_maps_and_reconstructs() {
     let dir = tempfile::tempdir().unwrap();
     let demo_dir = dir.path().join("demo");
-    let out = brdf_atlas(["demo", "--count", "2", "--dir", demo_dir.to_str().unwrap()]);
+    let out = brdf_atlas(["demo", "--count", "3", "--dir", demo_dir.to_str().unwrap()]);
     let (stdout, stderr) = texts(&out);
     assert!(out.status.success(), "{stderr}");
     assert!(
@@ -287,7 +287,7 @@ fn demo_synthesises_and_summarises() {
         "full-size tables need no warning: {stderr}"
     );
     let files = binaries(&demo_dir.join("merl"));
-    assert_eq!(files.len(), 2);
+    assert_eq!(files.len(), 3);
     for f in &files {
         assert_eq!(std::fs::metadata(f).unwrap().len(), 34_992_012, "90x90x180");
         let name = f.file_stem().unwrap().to_str().unwrap();
@@ -303,12 +303,40 @@ fn demo_synthesises_and_summarises() {
         assert_eq!(albedo.len(), 3, "{row}");
         assert!(albedo.iter().all(|a| *a > 0.0 && *a < 1.5), "{row}");
     }
-    assert!(
-        stdout.contains("[1/2]") && stdout.contains("[2/2]"),
-        "{stdout}"
+    for step in 1..=5 {
+        assert!(stdout.contains(&format!("[{step}/5]")), "{stdout}");
+    }
+    // Everything it made is there and said to be there.
+    for made in [
+        "model.atlas",
+        "model.atlas.store",
+        "map.png",
+        "map.json",
+        "map.exr",
+        "reconstructed.binary",
+    ] {
+        assert!(demo_dir.join(made).is_file(), "{made}");
+        assert!(stdout.contains(made), "{made} in {stdout}");
+    }
+    assert_eq!(
+        std::fs::metadata(demo_dir.join("reconstructed.binary"))
+            .unwrap()
+            .len(),
+        34_992_012,
+        "90x90x180"
     );
     assert!(
-        stdout.contains(&demo_dir.join("merl").display().to_string()),
+        stdout.contains(&demo_dir.display().to_string()),
         "says where the files went: {stdout}"
     );
+}
+
+#[test]
+fn demo_needs_three_materials_for_a_map() {
+    let dir = tempfile::tempdir().unwrap();
+    let demo_dir = dir.path().join("demo");
+    let out = brdf_atlas(["demo", "--count", "2", "--dir", demo_dir.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(texts(&out).1.contains("--count"), "{}", texts(&out).1);
+    assert!(!demo_dir.exists());
 }

@@ -92,3 +92,46 @@ pub fn binaries(dir: &Path) -> Vec<PathBuf> {
     files.sort();
     files
 }
+
+/// Synthesise `count` materials of `dims` (`"16,16,32"`) with `seed` into `dir`.
+pub fn synth(dir: &Path, count: usize, dims: &str, seed: u64) {
+    let out = brdf_atlas([
+        "synth",
+        "--count",
+        &count.to_string(),
+        "--dims",
+        dims,
+        "--seed",
+        &seed.to_string(),
+        dir.to_str().expect("UTF-8 temp path"),
+    ]);
+    assert!(out.status.success(), "synth: {}", texts(&out).1);
+}
+
+/// Fit the materials of `data` into `model` with `extra` arguments; returns stdout.
+pub fn fit(data: &Path, model: &Path, extra: &[&str]) -> String {
+    let mut args = vec![
+        "fit".as_ref(),
+        data.as_os_str(),
+        "-o".as_ref(),
+        model.as_os_str(),
+    ];
+    args.extend(extra.iter().map(std::ffi::OsStr::new));
+    let out = brdf_atlas(&args);
+    let (stdout, stderr) = texts(&out);
+    assert!(out.status.success(), "fit: {stderr}");
+    stdout
+}
+
+/// The latent point after `at` in a line like `name: at (0.1234, -0.5678)`.
+pub fn point_after_at(line: &str) -> Vec<f64> {
+    let inside = line
+        .split(" at (")
+        .nth(1)
+        .and_then(|s| s.split(')').next())
+        .unwrap_or_else(|| panic!("no `at (...)` in {line:?}"));
+    inside
+        .split(',')
+        .map(|v| v.trim().parse().expect("a coordinate"))
+        .collect()
+}
