@@ -1,18 +1,28 @@
-//! `info` on realistic data: the MERL materials as fitted by a neural model,
-//! written by `../shared/tools/nbrdf-to-merl` into the directory named by
-//! `BRDF_ATLAS_NBRDF_DIR` (`.ci/run` sets it). Without the variable the test
-//! says it is skipped; with it, it must find files and check every one.
+//! The tool on realistic data: the MERL materials as fitted by a neural
+//! model, written by `../shared/tools/nbrdf-to-merl` into the directory named
+//! by `BRDF_ATLAS_NBRDF_DIR` (`.ci/run` sets it). Without the variable the
+//! tests say they are skipped; with it, they must find files and use every one.
 
 mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{binaries, brdf_atlas, header_dims, reported, texts};
+use brdf_atlas_core::render::read_sidecar;
+use brdf_merl::MerlFile;
+use common::{binaries, brdf_atlas, fit, header_dims, point_after_at, reported, texts};
+
+/// The data directory, or `None` (and a note) when the variable is not set.
+fn nbrdf_dir() -> Option<PathBuf> {
+    let Some(dir) = std::env::var_os("BRDF_ATLAS_NBRDF_DIR") else {
+        println!("skipped: BRDF_ATLAS_NBRDF_DIR not set");
+        return None;
+    };
+    Some(PathBuf::from(dir))
+}
 
 #[test]
 fn info_reports_every_nbrdf_material() {
-    let Some(dir) = std::env::var_os("BRDF_ATLAS_NBRDF_DIR") else {
-        println!("skipped: BRDF_ATLAS_NBRDF_DIR not set");
+    let Some(dir) = nbrdf_dir() else {
         return;
     };
     let files = binaries(Path::new(&dir));
@@ -48,4 +58,74 @@ fn info_reports_every_nbrdf_material() {
         files.len(),
         PathBuf::from(&dir).display()
     );
+}
+
+#[test]
+fn fit_map_reconstruct_and_locate_nbrdf_materials() {
+    let Some(dir) = nbrdf_dir() else {
+        return;
+    };
+    let files = binaries(&dir);
+    assert!(
+        files.len() >= 3,
+        "BRDF_ATLAS_NBRDF_DIR={} needs at least 3 .binary files for a 2-D fit",
+        dir.display()
+    );
+    let work = tempfile::tempdir().unwrap();
+    let model = work.path().join("nbrdf.atlas");
+    let summary = fit(&dir, &model, &["--transform", "log"]);
+    assert!(
+        summary.contains(&format!("fitted {} materials", files.len())),
+        "{summary}"
+    );
+    assert!(summary.contains("transform log"), "{summary}");
+
+    // A small map: PNG, sidecar with every material.
+    let png_path = work.path().join("map.png");
+    let out = brdf_atlas([
+        Path::new("map"),
+        &model,
+        Path::new("-o"),
+        &png_path,
+        Path::new("--size"),
+        Path::new("64"),
+    ]);
+    assert!(out.status.success(), "map: {}", texts(&out).1);
+    let sidecar = read_sidecar(&work.path().join("map.json")).unwrap();
+    assert_eq!((sidecar.width, sidecar.height), (64, 64));
+    assert_eq!(sidecar.references.len(), files.len());
+    assert!(png_path.is_file());
+
+    // A new material halfway between the first two.
+    let (a, b) = (sidecar.references[0].latent, sidecar.references[1].latent);
+    let at = format!("{},{}", 0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]));
+    let new = work.path().join("between.binary");
+    let out = brdf_atlas([
+        Path::new("reconstruct"),
+        &model,
+        Path::new("--at"),
+        Path::new(&at),
+        Path::new("-o"),
+        &new,
+    ]);
+    assert!(out.status.success(), "reconstruct: {}", texts(&out).1);
+    let table = MerlFile::open(&new).unwrap();
+    assert_eq!(table.dims().to_string(), header_dims(&files[0]));
+    let mut raw = vec![0.0; 3 * table.dims().bins()];
+    table.copy_raw(0, &mut raw);
+    assert!(raw.iter().all(|&v| v >= 0.0 || v == -1.0));
+
+    // An input material lands in the box, next to itself.
+    let out = brdf_atlas([Path::new("locate"), &model, &files[0]]);
+    let (stdout, stderr) = texts(&out);
+    assert!(out.status.success(), "locate: {stderr}");
+    let x = point_after_at(stdout.lines().next().unwrap());
+    assert!(x.iter().all(|v| (-1.0..=1.0).contains(v)), "{stdout}");
+    let name = files[0].file_stem().unwrap().to_str().unwrap();
+    let nearest = stdout
+        .lines()
+        .find(|l| l.trim_start().starts_with("nearest"))
+        .unwrap();
+    assert!(nearest.contains(name), "{name} near itself: {stdout}");
+    println!("{summary}");
 }
