@@ -56,6 +56,19 @@ impl Bars {
     }
 }
 
+/// A bar for a phase counted in the library's own units (store rows run to
+/// millions), so it shows a percentage rather than counts.
+fn phase_bar(total: u64, message: &'static str) -> ProgressBar {
+    let style = ProgressStyle::with_template(
+        "{msg:>12} [{bar:32}] {percent:>3}% {elapsed_precise} (eta {eta})",
+    )
+    .expect("valid template")
+    .progress_chars("=> ");
+    ProgressBar::new(total)
+        .with_style(style)
+        .with_message(message)
+}
+
 /// What the user reads for each phase label of the core library.
 fn phase_message(label: &str) -> &'static str {
     match label {
@@ -71,7 +84,7 @@ impl brdf_atlas_core::Progress for Bars {
     fn start(&self, label: &str, total: u64) {
         self.with_bar(|pb| {
             pb.finish_and_clear();
-            *pb = bar(total as usize, phase_message(label));
+            *pb = phase_bar(total, phase_message(label));
         });
     }
 
