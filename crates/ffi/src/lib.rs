@@ -1,0 +1,57 @@
+//! The C ABI of brdf-atlas: open a fitted model, reconstruct a material at
+//! any latent point (as a MERL table in memory or a file), evaluate it for
+//! direction pairs, read the blend weights and the albedo map, and locate a
+//! MERL file in the latent plane.
+//!
+//! The header `include/brdf_atlas.h` is generated from this crate by
+//! cbindgen (`tests/header.rs` checks it is current);
+//! `include/brdf_atlas.hpp` wraps it for C++17. Conventions, as in the
+//! README's "Using it from C and C++":
+//!
+//! - **Handles.** `brdf_atlas_model_open` gives a `BrdfAtlasModel *` the
+//!   caller owns; `brdf_atlas_model_free` releases it (NULL is fine). A
+//!   handle is immutable: any number of threads may use one at once.
+//! - **Statuses.** Every fallible function returns a [`BrdfAtlasStatus`]
+//!   (`BRDF_ATLAS_STATUS_OK` = 0); `brdf_atlas_last_error_message` gives the
+//!   one-line message of the last call on the calling thread.
+//! - **Outputs** go through out-parameters and caller-allocated buffers with
+//!   an explicit length, written only on success; every variable size has a
+//!   query (`brdf_atlas_model_table_len`, `brdf_atlas_model_material_count`,
+//!   ...), and a short buffer gives `BRDF_ATLAS_STATUS_BUFFER_TOO_SMALL`.
+//! - **Nothing a caller passes crashes the host** short of pointers to
+//!   memory that is not there: every pointer is checked for NULL and
+//!   alignment, every length and coordinate is checked, and every entry
+//!   point catches panics (`BRDF_ATLAS_STATUS_PANIC`).
+//!
+//! ```
+//! use std::ffi::CStr;
+//! use brdf_atlas::{BrdfAtlasStatus, brdf_atlas_last_error_message, brdf_atlas_model_open};
+//!
+//! let mut model = std::ptr::null_mut();
+//! let status = unsafe { brdf_atlas_model_open(c"missing.atlas".as_ptr(), &mut model) };
+//! assert_eq!(status, BrdfAtlasStatus::Io);
+//! assert!(model.is_null()); // untouched on failure
+//! let message = unsafe { CStr::from_ptr(brdf_atlas_last_error_message()) };
+//! assert!(message.to_str().unwrap().starts_with("brdf_atlas_model_open: missing.atlas: "));
+//! ```
+#![warn(missing_docs)]
+
+mod check;
+pub mod model;
+pub mod query;
+pub mod status;
+
+pub use model::{
+    BrdfAtlasDims, BrdfAtlasModel, BrdfAtlasView, brdf_atlas_model_dims, brdf_atlas_model_free,
+    brdf_atlas_model_latent_dim, brdf_atlas_model_latent_point, brdf_atlas_model_material_count,
+    brdf_atlas_model_material_name, brdf_atlas_model_open, brdf_atlas_model_table_len,
+    brdf_atlas_model_view,
+};
+pub use query::{
+    BRDF_ATLAS_MAX_SAMPLES, BrdfAtlasLocation, brdf_atlas_model_albedo_map, brdf_atlas_model_eval,
+    brdf_atlas_model_eval_batch, brdf_atlas_model_locate, brdf_atlas_model_reconstruct,
+    brdf_atlas_model_reconstruct_to_file, brdf_atlas_model_weights,
+};
+pub use status::{
+    BrdfAtlasStatus, brdf_atlas_last_error_message, brdf_atlas_status_message, brdf_atlas_version,
+};

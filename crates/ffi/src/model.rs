@@ -1,0 +1,303 @@
+//! The model handle: open, free, and the facts of a model.
+
+use std::ffi::c_char;
+
+use brdf_atlas_core::Model;
+use brdf_atlas_core::map::View;
+
+use crate::check;
+use crate::status::{BrdfAtlasStatus, Failure, run};
+
+/// An opened model: the fitted latent space and its memory-mapped store.
+///
+/// Opaque. Created by `brdf_atlas_model_open`, released by
+/// `brdf_atlas_model_free`. Immutable once open: one handle may serve
+/// concurrent calls from any number of threads.
+pub struct BrdfAtlasModel {
+    pub(crate) model: Model,
+}
+
+// One handle serves many threads: the model must be shareable.
+const _: () = {
+    const fn shareable<T: Send + Sync>() {}
+    shareable::<BrdfAtlasModel>()
+};
+
+/// A window of the latent plane: x in [x0, x1], y in [y0, y1], y up.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BrdfAtlasView {
+    /// Left edge.
+    pub x0: f64,
+    /// Right edge.
+    pub x1: f64,
+    /// Bottom edge.
+    pub y0: f64,
+    /// Top edge.
+    pub y1: f64,
+}
+
+impl From<View> for BrdfAtlasView {
+    fn from(v: View) -> Self {
+        BrdfAtlasView {
+            x0: v.x0,
+            x1: v.x1,
+            y0: v.y0,
+            y1: v.y1,
+        }
+    }
+}
+
+impl From<BrdfAtlasView> for View {
+    fn from(v: BrdfAtlasView) -> Self {
+        View {
+            x0: v.x0,
+            x1: v.x1,
+            y0: v.y0,
+            y1: v.y1,
+        }
+    }
+}
+
+/// The dims of a MERL table: bins along theta_h, theta_d and phi_d
+/// (90, 90, 180 for MERL itself). A table holds 3 * bins doubles, bins =
+/// theta_h * theta_d * phi_d.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BrdfAtlasDims {
+    /// Bins along theta_h (square-root spaced).
+    pub theta_h: usize,
+    /// Bins along theta_d.
+    pub theta_d: usize,
+    /// Bins along phi_d, over [0, pi).
+    pub phi_d: usize,
+}
+
+/// Open the model file at `path` (its store, `path` + ".store", beside it)
+/// and check it: format, version, the store's size and checksum.
+///
+/// Ownership: `path` is borrowed for the call. On success `*out` receives a
+/// new handle that the caller owns and must release with
+/// `brdf_atlas_model_free`; on failure `*out` is left untouched.
+///
+/// Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (path empty or not UTF-8),
+/// IO (missing or unreadable file or store), BAD_FILE (not a model, another
+/// version, store changed), NOT_POSITIVE_DEFINITE.
+///
+/// # Safety
+/// `path` is NULL or a NUL-terminated string; `out` is NULL or valid for
+/// writing one pointer.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn brdf_atlas_model_open(
+    path: *const c_char,
+    out: *mut *mut BrdfAtlasModel,
+) -> BrdfAtlasStatus {
+    run("brdf_atlas_model_open", || {
+        let path = unsafe { check::path(path, "path") }?;
+        let out = unsafe { check::out(out, "out") }?;
+        let model = Model::open(path)?;
+        *out = Box::into_raw(Box::new(BrdfAtlasModel { model }));
+        Ok(())
+    })
+}
+
+/// Release a handle and everything it holds (the store's mapping).
+///
+/// Ownership: takes back a handle from `brdf_atlas_model_open`; NULL is
+/// allowed and does nothing. The handle must not be used again, and no other
+/// thread may be using it.
+///
+/// # Safety
+/// `model` is NULL or a handle from `brdf_atlas_model_open` not yet freed.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn brdf_atlas_model_free(model: *mut BrdfAtlasModel) {
+    let _ = run("brdf_atlas_model_free", || {
+        if !model.is_null() {
+            // SAFETY: the caller gives back ownership of a live handle.
+            drop(unsafe { Box::from_raw(model) });
+        }
+        Ok(())
+    });
+}
+
+/// The latent dimension q of the model (2 for a map).
+///
+/// Ownership: `model` is borrowed; `*q` is written on success.
+///
+/// # Safety
+/// `model` is NULL or a live handle; `q` is NULL or valid for writing.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn brdf_atlas_model_latent_dim(
+    model: *const BrdfAtlasModel,
+    q: *mut usize,
+) -> BrdfAtlasStatus {
+    run("brdf_atlas_model_latent_dim", || {
+        let m = unsafe { check::model(model) }?;
+        let q = unsafe { check::out(q, "q") }?;
+        *q = m.q();
+        Ok(())
+    })
+}
+
+/// The number N of materials the model was fitted to (the length of a
+/// weights vector).
+///
+/// Ownership: `model` is borrowed; `*count` is written on success.
+///
+/// # Safety
+/// `model` is NULL or a live handle; `count` is NULL or valid for writing.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn brdf_atlas_model_material_count(
+    model: *const BrdfAtlasModel,
+    count: *mut usize,
+) -> BrdfAtlasStatus {
+    run("brdf_atlas_model_material_count", || {
+        let m = unsafe { check::model(model) }?;
+        let count = unsafe { check::out(count, "count") }?;
+        *count = m.names().len();
+        Ok(())
+    })
+}
+
+/// The name of material `index` (0 <= index < N), UTF-8, copied into
+/// `buf` with a terminating NUL.
+///
+/// Size query: with `buf` NULL and `len` 0, only `*name_len` is written.
+/// Otherwise `buf` must hold `*name_len + 1` bytes.
+///
+/// Ownership: `model` is borrowed; `buf` (caller-owned, `len` bytes) and
+/// `*name_len` (the name's length in bytes, without the NUL) are written on
+/// success only.
+///
+/// Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (index out of range),
+/// BUFFER_TOO_SMALL (len < name length + 1).
+///
+/// # Safety
+/// `model` is NULL or a live handle; `buf` is NULL or valid for writing
+/// `len` bytes; `name_len` is NULL or valid for writing.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn brdf_atlas_model_material_name(
+    model: *const BrdfAtlasModel,
+    index: usize,
+    buf: *mut c_char,
+    len: usize,
+    name_len: *mut usize,
+) -> BrdfAtlasStatus {
+    run("brdf_atlas_model_material_name", || {
+        let m = unsafe { check::model(model) }?;
+        let name_len = unsafe { check::out(name_len, "name_len") }?;
+        let name = m.names().get(index).ok_or_else(|| {
+            Failure::invalid(format!(
+                "material {index} does not exist, the model has {}",
+                m.names().len()
+            ))
+        })?;
+        if !(buf.is_null() && len == 0) {
+            let bytes = name.as_bytes();
+            let out = unsafe { check::buffer(buf, len, bytes.len() + 1, "buf") }?;
+            for (o, b) in out.iter_mut().zip(bytes.iter().chain([&0u8])) {
+                *o = *b as c_char;
+            }
+        }
+        *name_len = name.len();
+        Ok(())
+    })
+}
+
+/// The latent coordinates of material `index` (0 <= index < N): q doubles
+/// into `buf`.
+///
+/// Ownership: `model` is borrowed; `buf` is caller-owned, `len` doubles,
+/// written on success only.
+///
+/// Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (index out of range),
+/// BUFFER_TOO_SMALL (len < q).
+///
+/// # Safety
+/// `model` is NULL or a live handle; `buf` is NULL or valid for writing
+/// `len` doubles.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn brdf_atlas_model_latent_point(
+    model: *const BrdfAtlasModel,
+    index: usize,
+    buf: *mut f64,
+    len: usize,
+) -> BrdfAtlasStatus {
+    run("brdf_atlas_model_latent_point", || {
+        let m = unsafe { check::model(model) }?;
+        let n = m.names().len();
+        if index >= n {
+            return Err(Failure::invalid(format!(
+                "material {index} does not exist, the model has {n}"
+            )));
+        }
+        let out = unsafe { check::buffer(buf, len, m.q(), "buf") }?;
+        for (c, o) in out.iter_mut().enumerate() {
+            *o = m.latent()[(index, c)];
+        }
+        Ok(())
+    })
+}
+
+/// The window of the latent plane a map of this model shows by default: the
+/// box [-1, 1]^2 the latent points live in, plus a 10% margin.
+///
+/// Ownership: `model` is borrowed; `*view` is written on success.
+///
+/// # Safety
+/// `model` is NULL or a live handle; `view` is NULL or valid for writing.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn brdf_atlas_model_view(
+    model: *const BrdfAtlasModel,
+    view: *mut BrdfAtlasView,
+) -> BrdfAtlasStatus {
+    run("brdf_atlas_model_view", || {
+        let _ = unsafe { check::model(model) }?;
+        let view = unsafe { check::out(view, "view") }?;
+        *view = View::default().into();
+        Ok(())
+    })
+}
+
+/// The dims of the model's tables (those of the materials it was fitted to).
+///
+/// Ownership: `model` is borrowed; `*dims` is written on success.
+///
+/// # Safety
+/// `model` is NULL or a live handle; `dims` is NULL or valid for writing.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn brdf_atlas_model_dims(
+    model: *const BrdfAtlasModel,
+    dims: *mut BrdfAtlasDims,
+) -> BrdfAtlasStatus {
+    run("brdf_atlas_model_dims", || {
+        let m = unsafe { check::model(model) }?;
+        let dims = unsafe { check::out(dims, "dims") }?;
+        let d = m.dims();
+        *dims = BrdfAtlasDims {
+            theta_h: d.theta_h,
+            theta_d: d.theta_d,
+            phi_d: d.phi_d,
+        };
+        Ok(())
+    })
+}
+
+/// The length, in doubles, of a reconstructed table: 3 * bins.
+///
+/// Ownership: `model` is borrowed; `*len` is written on success.
+///
+/// # Safety
+/// `model` is NULL or a live handle; `len` is NULL or valid for writing.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn brdf_atlas_model_table_len(
+    model: *const BrdfAtlasModel,
+    len: *mut usize,
+) -> BrdfAtlasStatus {
+    run("brdf_atlas_model_table_len", || {
+        let m = unsafe { check::model(model) }?;
+        let len = unsafe { check::out(len, "len") }?;
+        *len = m.dims().values();
+        Ok(())
+    })
+}
