@@ -36,6 +36,11 @@
 #define BRDF_ATLAS_MAX_SAMPLES (1 << 24)
 
 /**
+ * The largest side, in pixels, of an albedo map.
+ */
+#define BRDF_ATLAS_MAX_MAP_SIDE 16384
+
+/**
  * What a call did. Every fallible function returns one; the numbers are
  * fixed and will not change. `brdf_atlas_status_message` names a status,
  * `brdf_atlas_last_error_message` gives the full message of the last failed
@@ -449,7 +454,7 @@ enum BrdfAtlasStatus brdf_atlas_model_weights(const struct BrdfAtlasModel *model
  * floats (at least width * height * 3), written on success only.
  *
  * Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (zero size or more than
- * 16384 a side, view not finite or empty, too many samples), UNSUPPORTED
+ * `BRDF_ATLAS_MAX_MAP_SIDE` a side, view not finite or empty, too many samples), UNSUPPORTED
  * (the model is not 2-D), BUFFER_TOO_SMALL.
  *
  * # Safety

@@ -48,9 +48,10 @@ pub use model::{
     brdf_atlas_model_view,
 };
 pub use query::{
-    BRDF_ATLAS_MAX_SAMPLES, BrdfAtlasLocation, brdf_atlas_model_albedo_map, brdf_atlas_model_eval,
-    brdf_atlas_model_eval_batch, brdf_atlas_model_locate, brdf_atlas_model_reconstruct,
-    brdf_atlas_model_reconstruct_to_file, brdf_atlas_model_weights,
+    BRDF_ATLAS_MAX_MAP_SIDE, BRDF_ATLAS_MAX_SAMPLES, BrdfAtlasLocation,
+    brdf_atlas_model_albedo_map, brdf_atlas_model_eval, brdf_atlas_model_eval_batch,
+    brdf_atlas_model_locate, brdf_atlas_model_reconstruct, brdf_atlas_model_reconstruct_to_file,
+    brdf_atlas_model_weights,
 };
 pub use status::{
     BrdfAtlasStatus, brdf_atlas_last_error_message, brdf_atlas_status_message, brdf_atlas_version,

@@ -15,6 +15,9 @@ use crate::status::{BrdfAtlasStatus, Failure, Result, run};
 /// take hours.
 pub const BRDF_ATLAS_MAX_SAMPLES: usize = 1 << 24;
 
+/// The largest side, in pixels, of an albedo map.
+pub const BRDF_ATLAS_MAX_MAP_SIDE: usize = 16384;
+
 /// Where a MERL file lands in a model's latent plane.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -268,7 +271,7 @@ fn map_samples(model: &Model, samples: usize) -> Result<Option<usize>> {
 /// floats (at least width * height * 3), written on success only.
 ///
 /// Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (zero size or more than
-/// 16384 a side, view not finite or empty, too many samples), UNSUPPORTED
+/// `BRDF_ATLAS_MAX_MAP_SIDE` a side, view not finite or empty, too many samples), UNSUPPORTED
 /// (the model is not 2-D), BUFFER_TOO_SMALL.
 ///
 /// # Safety
@@ -293,9 +296,10 @@ pub unsafe extern "C" fn brdf_atlas_model_albedo_map(
             Err(f) => return Err(f),
         };
         view.check()?;
-        if width == 0 || height == 0 || width > 16384 || height > 16384 {
+        let max = BRDF_ATLAS_MAX_MAP_SIDE;
+        if width == 0 || height == 0 || width > max || height > max {
             return Err(Failure::invalid(format!(
-                "map size {width}x{height} must be between 1 and 16384 a side"
+                "map size {width}x{height} must be between 1 and {max} a side"
             )));
         }
         let values = check::product(&[width, height, 3], "map size")?;
