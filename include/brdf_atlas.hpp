@@ -1,0 +1,225 @@
+// brdf_atlas.hpp: a header-only C++17 wrapper of brdf_atlas.h.
+//
+// brdf_atlas::Model owns a BrdfAtlasModel handle (move-only, freed in the
+// destructor); its methods return values and std::vectors and throw
+// brdf_atlas::Error, which carries the status and the library's one-line
+// message, on any failure. A Model is safe to use from several threads at
+// once (every method is const). Written by hand; the C header it includes is
+// generated.
+//
+//     brdf_atlas::Model model("atlas.model");
+//     std::vector<double> table = model.reconstruct(0.2, -0.4);
+//     model.save(0.2, -0.4, "new.binary");
+#ifndef BRDF_ATLAS_HPP
+#define BRDF_ATLAS_HPP
+
+#include <array>
+#include <cstddef>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "brdf_atlas.h"
+
+namespace brdf_atlas {
+
+/// A failed call: the status and the library's message for it.
+class Error : public std::runtime_error {
+public:
+    Error(BrdfAtlasStatus status, const std::string &message)
+        : std::runtime_error(message), status_(status) {}
+
+    /// The status the C function returned.
+    BrdfAtlasStatus status() const noexcept { return status_; }
+
+private:
+    BrdfAtlasStatus status_;
+};
+
+/// Throw Error unless `status` is OK, with the calling thread's last message.
+inline void check(BrdfAtlasStatus status) {
+    if (status == BRDF_ATLAS_STATUS_OK) {
+        return;
+    }
+    std::string message = brdf_atlas_last_error_message();
+    if (message.empty()) {
+        message = brdf_atlas_status_message(status);
+    }
+    throw Error(status, message);
+}
+
+/// The library's version, "MAJOR.MINOR.PATCH".
+inline std::string version() { return brdf_atlas_version(); }
+
+using View = BrdfAtlasView;
+using Dims = BrdfAtlasDims;
+using Location = BrdfAtlasLocation;
+using Vec3 = std::array<double, 3>;
+static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 arrays must be packed doubles");
+
+/// An opened model. Move-only; the handle is released by the destructor.
+class Model {
+public:
+    /// Open the model file at `path` (its store beside it). Throws Error.
+    explicit Model(const std::string &path) {
+        check(brdf_atlas_model_open(path.c_str(), &handle_));
+    }
+
+    ~Model() { brdf_atlas_model_free(handle_); }
+
+    Model(const Model &) = delete;
+    Model &operator=(const Model &) = delete;
+
+    Model(Model &&other) noexcept : handle_(std::exchange(other.handle_, nullptr)) {}
+
+    Model &operator=(Model &&other) noexcept {
+        if (this != &other) {
+            brdf_atlas_model_free(handle_);
+            handle_ = std::exchange(other.handle_, nullptr);
+        }
+        return *this;
+    }
+
+    /// The C handle, still owned by this object (NULL after a move).
+    const BrdfAtlasModel *get() const noexcept { return handle_; }
+
+    /// Latent dimension q (2 for a map).
+    std::size_t latent_dim() const {
+        std::size_t q = 0;
+        check(brdf_atlas_model_latent_dim(handle_, &q));
+        return q;
+    }
+
+    /// Number N of input materials.
+    std::size_t material_count() const {
+        std::size_t n = 0;
+        check(brdf_atlas_model_material_count(handle_, &n));
+        return n;
+    }
+
+    /// Name of material `index`.
+    std::string material_name(std::size_t index) const {
+        std::size_t len = 0;
+        check(brdf_atlas_model_material_name(handle_, index, nullptr, 0, &len));
+        std::string name(len + 1, '\0');
+        check(brdf_atlas_model_material_name(handle_, index, name.data(), name.size(), &len));
+        name.resize(len);
+        return name;
+    }
+
+    /// Latent coordinates of material `index` (q values).
+    std::vector<double> latent_point(std::size_t index) const {
+        std::vector<double> p(latent_dim());
+        check(brdf_atlas_model_latent_point(handle_, index, p.data(), p.size()));
+        return p;
+    }
+
+    /// The default window of a map.
+    View view() const {
+        View v{};
+        check(brdf_atlas_model_view(handle_, &v));
+        return v;
+    }
+
+    /// Table dims.
+    Dims dims() const {
+        Dims d{};
+        check(brdf_atlas_model_dims(handle_, &d));
+        return d;
+    }
+
+    /// Length of a table in doubles (3 * bins).
+    std::size_t table_len() const {
+        std::size_t len = 0;
+        check(brdf_atlas_model_table_len(handle_, &len));
+        return len;
+    }
+
+    /// The table at (x, y) in the MERL layout, raw MERL units (-1: unmeasured).
+    std::vector<double> reconstruct(double x, double y) const {
+        std::vector<double> table(table_len());
+        reconstruct_into(x, y, table.data(), table.size());
+        return table;
+    }
+
+    /// The table at (x, y) into a caller buffer of `len` doubles.
+    void reconstruct_into(double x, double y, double *buf, std::size_t len) const {
+        check(brdf_atlas_model_reconstruct(handle_, x, y, buf, len, nullptr));
+    }
+
+    /// Write the table at (x, y) as a MERL .binary file, atomically.
+    void save(double x, double y, const std::string &path) const {
+        check(brdf_atlas_model_reconstruct_to_file(handle_, x, y, path.c_str()));
+    }
+
+    /// RGB reflectance at (x, y) for one direction pair; NaN where there is
+    /// no value (below the horizon, unmeasured).
+    Vec3 eval(double x, double y, const Vec3 &wi, const Vec3 &wo) const {
+        Vec3 rgb{};
+        check(brdf_atlas_model_eval(handle_, x, y, wi.data(), wo.data(), rgb.data()));
+        return rgb;
+    }
+
+    /// RGB reflectance at (x, y) for every pair (wi[k], wo[k]); NaN where a
+    /// pair has no value.
+    std::vector<Vec3> eval_batch(double x, double y, const std::vector<Vec3> &wi,
+                                 const std::vector<Vec3> &wo) const {
+        if (wi.size() != wo.size()) {
+            throw Error(BRDF_ATLAS_STATUS_INVALID_ARGUMENT,
+                        "eval_batch: wi and wo differ in length");
+        }
+        std::vector<Vec3> rgb(wi.size());
+        check(brdf_atlas_model_eval_batch(handle_, x, y, wi.empty() ? nullptr : wi[0].data(),
+                                          wo.empty() ? nullptr : wo[0].data(), wi.size(),
+                                          rgb.empty() ? nullptr : rgb[0].data(),
+                                          3 * rgb.size()));
+        return rgb;
+    }
+
+    /// The N blend weights at (x, y).
+    std::vector<double> weights(double x, double y) const {
+        std::vector<double> w(material_count());
+        check(brdf_atlas_model_weights(handle_, x, y, w.data(), w.size()));
+        return w;
+    }
+
+    /// The albedo map: width * height RGB triples, row 0 at the top of `view`.
+    /// `samples` 0 is the library default.
+    std::vector<float> albedo_map(std::size_t width, std::size_t height, const View &view,
+                                  std::size_t samples = 0) const {
+        return map(width, height, &view, samples);
+    }
+
+    /// The albedo map of the default window.
+    std::vector<float> albedo_map(std::size_t width, std::size_t height) const {
+        return map(width, height, nullptr, 0);
+    }
+
+    /// Where the MERL file at `merl_path` lands.
+    Location locate(const std::string &merl_path) const {
+        Location l{};
+        check(brdf_atlas_model_locate(handle_, merl_path.c_str(), &l));
+        return l;
+    }
+
+private:
+    std::vector<float> map(std::size_t width, std::size_t height, const View *view,
+                           std::size_t samples) const {
+        if (width == 0 || height == 0 || width > BRDF_ATLAS_MAX_MAP_SIDE ||
+            height > BRDF_ATLAS_MAX_MAP_SIDE) {
+            // Not worth allocating for: let the library say what is wrong.
+            check(brdf_atlas_model_albedo_map(handle_, width, height, view, samples, nullptr, 0));
+        }
+        std::vector<float> rgb(width * height * 3);
+        check(brdf_atlas_model_albedo_map(handle_, width, height, view, samples, rgb.data(),
+                                          rgb.size()));
+        return rgb;
+    }
+
+    BrdfAtlasModel *handle_ = nullptr;
+};
+
+}  // namespace brdf_atlas
+
+#endif  // BRDF_ATLAS_HPP
