@@ -1,0 +1,129 @@
+//! The C functions called from Rust, for what the C and C++ consumers do
+//! not reach: models that are not 2-D, a raw-transform model's exact map,
+//! misaligned buffers.
+
+use std::ffi::{CStr, CString};
+use std::path::{Path, PathBuf};
+use std::ptr::{null, null_mut};
+
+use brdf_atlas::*;
+use brdf_atlas_core::map::View;
+use brdf_atlas_core::model::{FitOptions, fit_dir};
+use brdf_atlas_core::{GplvmParams, Model, NoProgress, Precision, TransformKind};
+use brdf_merl::Dims;
+use brdf_merl::synth::database;
+
+fn fit(dir: &Path, q: usize, transform: TransformKind) -> PathBuf {
+    let data = dir.join("data");
+    if !data.exists() {
+        std::fs::create_dir_all(&data).unwrap();
+        for m in database(5, 9) {
+            m.brdf
+                .table(Dims::new(6, 6, 12).unwrap())
+                .write(data.join(format!("{}.binary", m.name)))
+                .unwrap();
+        }
+    }
+    let model = dir.join(format!("q{q}-{}.model", transform.name()));
+    let options = FitOptions {
+        params: GplvmParams::new(q).check().unwrap(),
+        transform,
+        precision: Precision::F64,
+    };
+    fit_dir(&data, &model, &options, &NoProgress).unwrap();
+    model
+}
+
+/// An open handle, freed on drop.
+struct Handle(*mut BrdfAtlasModel);
+
+impl Handle {
+    fn open(path: &Path) -> Handle {
+        let c = CString::new(path.to_str().unwrap()).unwrap();
+        let mut h = null_mut();
+        assert_eq!(
+            unsafe { brdf_atlas_model_open(c.as_ptr(), &mut h) },
+            BrdfAtlasStatus::Ok
+        );
+        Handle(h)
+    }
+}
+
+impl Drop for Handle {
+    fn drop(&mut self) {
+        unsafe { brdf_atlas_model_free(self.0) }
+    }
+}
+
+fn last_error() -> String {
+    unsafe { CStr::from_ptr(brdf_atlas_last_error_message()) }
+        .to_string_lossy()
+        .into_owned()
+}
+
+#[test]
+fn a_three_dimensional_model_answers_facts_and_refuses_planar_calls() {
+    let tmp = tempfile::tempdir().unwrap();
+    let h = Handle::open(&fit(tmp.path(), 3, TransformKind::Log));
+    let mut q = 0;
+    assert_eq!(
+        unsafe { brdf_atlas_model_latent_dim(h.0, &mut q) },
+        BrdfAtlasStatus::Ok
+    );
+    assert_eq!(q, 3);
+    let mut p = [0.0; 3];
+    assert_eq!(
+        unsafe { brdf_atlas_model_latent_point(h.0, 4, p.as_mut_ptr(), 3) },
+        BrdfAtlasStatus::Ok
+    );
+    assert!(p.iter().all(|v| v.abs() <= 1.0) && p != [0.0; 3], "{p:?}");
+
+    let mut len = 0;
+    unsafe { brdf_atlas_model_table_len(h.0, &mut len) };
+    let mut table = vec![0.0; len];
+    let s =
+        unsafe { brdf_atlas_model_reconstruct(h.0, 0.1, 0.2, table.as_mut_ptr(), len, null_mut()) };
+    assert_eq!(s, BrdfAtlasStatus::Unsupported);
+    assert!(last_error().contains("3-D"), "{}", last_error());
+    let mut map = vec![0.0f32; 4 * 4 * 3];
+    let s =
+        unsafe { brdf_atlas_model_albedo_map(h.0, 4, 4, null(), 0, map.as_mut_ptr(), map.len()) };
+    assert_eq!(s, BrdfAtlasStatus::Unsupported);
+    let mut w = [0.0; 5];
+    let s = unsafe { brdf_atlas_model_weights(h.0, 0.0, 0.0, w.as_mut_ptr(), 5) };
+    assert_eq!(s, BrdfAtlasStatus::Unsupported);
+}
+
+#[test]
+fn default_samples_of_a_raw_model_give_the_exact_linear_map() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = fit(tmp.path(), 2, TransformKind::Raw);
+    let h = Handle::open(&path);
+    let (w, ht) = (7, 5);
+    let mut map = vec![0.0f32; w * ht * 3];
+    let s =
+        unsafe { brdf_atlas_model_albedo_map(h.0, w, ht, null(), 0, map.as_mut_ptr(), map.len()) };
+    assert_eq!(s, BrdfAtlasStatus::Ok, "{}", last_error());
+    let m = Model::open(&path).unwrap();
+    let want = m
+        .albedo_map(w, ht, View::default(), None, &NoProgress)
+        .unwrap();
+    let want: Vec<f32> = want.rgb.iter().flatten().copied().collect();
+    assert_eq!(map, want);
+}
+
+#[test]
+fn misaligned_buffers_are_refused_untouched() {
+    let tmp = tempfile::tempdir().unwrap();
+    let h = Handle::open(&fit(tmp.path(), 2, TransformKind::Log));
+    let mut bytes = vec![7u8; 8 * 8];
+    let misaligned = unsafe { bytes.as_mut_ptr().add(1) }.cast::<f64>();
+    let s = unsafe { brdf_atlas_model_weights(h.0, 0.0, 0.0, misaligned, 5) };
+    assert_eq!(s, BrdfAtlasStatus::InvalidArgument);
+    assert!(last_error().contains("not aligned"), "{}", last_error());
+    assert!(bytes.iter().all(|b| *b == 7));
+    let s = unsafe {
+        brdf_atlas_model_weights(misaligned.cast_const().cast(), 0.0, 0.0, misaligned, 5)
+    };
+    assert_eq!(s, BrdfAtlasStatus::InvalidArgument);
+}
