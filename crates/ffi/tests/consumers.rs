@@ -320,12 +320,15 @@ fn cpp_consumer_agrees_with_rust_through_the_raii_wrapper() {
 
 #[test]
 fn readme_example_writes_the_reconstruction() {
-    let f = fixture();
-    let exe = build_cpp(
-        f,
-        &repo().join("crates/ffi/examples/merl_at.cpp"),
-        "merl_at",
+    let source = repo().join("crates/ffi/examples/merl_at.cpp");
+    let readme = std::fs::read_to_string(repo().join("README.md")).unwrap();
+    let text = std::fs::read_to_string(&source).unwrap();
+    assert!(
+        readme.contains(&format!("```cpp\n{text}```")),
+        "the README's C++ example is not crates/ffi/examples/merl_at.cpp: copy it over"
     );
+    let f = fixture();
+    let exe = build_cpp(f, &source, "merl_at");
     let out_file = f.dir.join("out/readme.binary");
     let [x, y] = POINTS[1];
     let stdout = run(
