@@ -315,7 +315,7 @@ enum BrdfAtlasStatus brdf_atlas_model_table_len(const struct BrdfAtlasModel *mod
 /**
  * Reconstruct the whole table at latent point (x, y) into `buf`, in the
  * MERL layout and units: the red, green and blue blocks of `bins` doubles
- * each, each indexed [theta_h][theta_d][phi_d], raw MERL values (a MERL
+ * each, each indexed `[theta_h][theta_d][phi_d]`, raw MERL values (a MERL
  * `.binary` file's data after its 12-byte header), -1 where no input
  * material was measured. `brdf_atlas_model_table_len` gives the length.
  *
