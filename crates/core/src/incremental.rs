@@ -22,7 +22,7 @@
 //! `N / mu`), so the state refactorises with Cholesky every `refresh_every`
 //! accepted moves at most, and at once when `g2` is small. Each
 //! refactorisation measures the drift it corrects, and the interval adapts:
-//! halved when the drift exceeds [`TARGET_DRIFT`], doubled (up to
+//! halved when the drift exceeds `TARGET_DRIFT`, doubled (up to
 //! `refresh_every`) when it is far below. Large moves on an ill-conditioned
 //! `K` lose about `cond(K) eps` a move and refactorise often; the small steps
 //! of a converging search refactorise rarely.

@@ -356,11 +356,41 @@ pub fn fit_dir(
     let scan_time = t0.elapsed();
     let t1 = Instant::now();
     let store_path = store_path_for(model);
-    let (store, y) = build_store(
+    // The store is built under a temporary name and takes its place only
+    // once the fit has succeeded: a failed re-fit leaves the old pair intact.
+    let staging = brdf_merl::atomic::temp_path_for(&store_path);
+    let result = fit_staged(
         &data,
+        model,
+        options,
+        progress,
+        &store_path,
+        &staging,
+        scan_time,
+        t1,
+    );
+    if result.is_err() {
+        let _ = std::fs::remove_file(&staging);
+    }
+    result
+}
+
+#[allow(clippy::too_many_arguments)]
+fn fit_staged(
+    data: &Dataset,
+    model: &Path,
+    options: &FitOptions,
+    progress: &dyn Progress,
+    store_path: &Path,
+    staging: &Path,
+    scan_time: Duration,
+    t1: Instant,
+) -> Result<FitReport> {
+    let (store, y) = build_store(
+        data,
         options.transform,
         options.precision,
-        &store_path,
+        staging,
         progress,
     )?;
     let store_time = t1.elapsed();
@@ -407,14 +437,15 @@ pub fn fit_dir(
             checksum: format!("{:016x}", store.checksum()),
         },
     };
+    std::fs::rename(staging, store_path).map_err(|e| CoreError::io(store_path, e))?;
     Model::write_file(model, &file)?;
     let save_time = t3.elapsed();
     Ok(FitReport {
-        names: data.names,
-        ignored: data.ignored,
+        names: data.names.clone(),
+        ignored: data.ignored.clone(),
         fit,
         model_path: model.to_path_buf(),
-        store_path,
+        store_path: store_path.to_path_buf(),
         scan_time,
         store_time,
         optimise_time,
@@ -470,6 +501,28 @@ mod tests {
         }
         assert!(m.weights_at(&[f64::NAN, 0.0]).is_err());
         assert!(m.weights_at(&[0.0]).is_err());
+    }
+
+    #[test]
+    fn a_failed_refit_leaves_the_old_model_intact() {
+        let tmp = tempfile::tempdir().unwrap();
+        let path = fitted(tmp.path());
+        let before = std::fs::read(store_path_for(&path)).unwrap();
+        // q = 6 passes the parameter check but not the fit of 6 materials.
+        let options = FitOptions {
+            params: GplvmParams::new(6).check().unwrap(),
+            transform: TransformKind::Raw,
+            precision: Precision::F64,
+        };
+        assert!(fit_dir(tmp.path(), &path, &options, &NoProgress).is_err());
+        assert_eq!(std::fs::read(store_path_for(&path)).unwrap(), before);
+        Model::open(&path).unwrap();
+        let leftovers: Vec<_> = std::fs::read_dir(tmp.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.contains(".tmp-"))
+            .collect();
+        assert!(leftovers.is_empty(), "{leftovers:?}");
     }
 
     #[test]
