@@ -52,18 +52,7 @@ impl Model {
                 let mut raw = vec![0.0; r1 - r0];
                 file.copy_raw(r0, &mut raw);
                 let mut t = vec![0.0; r1 - r0];
-                let mut r = r0;
-                while r < r1 {
-                    let (c, bin0) = (r / bins, r % bins);
-                    let len = (r1 - r).min(bins - bin0);
-                    self.transform.forward_raw_run(
-                        c,
-                        bin0,
-                        &raw[r - r0..r - r0 + len],
-                        &mut t[r - r0..r - r0 + len],
-                    );
-                    r += len;
-                }
+                self.transform.forward_raw_rows(bins, r0, &raw, &mut t);
                 let mut b = vec![0.0; n];
                 let mut s = 0.0;
                 let mut zrow = vec![0.0; n];

@@ -26,38 +26,21 @@ pub struct Blend<'m> {
     weights: Vec<f64>,
 }
 
-/// `w . z_row`, accumulated in f64 with four independent partial sums (fixed order).
+/// `w . z_row`, accumulated in f64 with four independent partial sums (fixed
+/// order); f32 store values are widened.
 #[inline]
-fn dot_f64(w: &[f64], z: &[f64]) -> f64 {
+fn dot<T: Copy + Into<f64>>(w: &[f64], z: &[T]) -> f64 {
     let mut acc = [0.0f64; 4];
     let (wc, wr) = w.split_at(w.len() / 4 * 4);
     let (zc, zr) = z.split_at(wc.len());
     for (a, b) in wc.chunks_exact(4).zip(zc.chunks_exact(4)) {
         for k in 0..4 {
-            acc[k] += a[k] * b[k];
+            acc[k] += a[k] * b[k].into();
         }
     }
     let mut s = (acc[0] + acc[1]) + (acc[2] + acc[3]);
     for (a, b) in wr.iter().zip(zr) {
-        s += a * b;
-    }
-    s
-}
-
-/// `w . z_row` for an f32 store: f32 values widened, f64 sums.
-#[inline]
-fn dot_f32(w: &[f64], z: &[f32]) -> f64 {
-    let mut acc = [0.0f64; 4];
-    let (wc, wr) = w.split_at(w.len() / 4 * 4);
-    let (zc, zr) = z.split_at(wc.len());
-    for (a, b) in wc.chunks_exact(4).zip(zc.chunks_exact(4)) {
-        for k in 0..4 {
-            acc[k] += a[k] * b[k] as f64;
-        }
-    }
-    let mut s = (acc[0] + acc[1]) + (acc[2] + acc[3]);
-    for (a, b) in wr.iter().zip(zr) {
-        s += a * *b as f64;
+        s += a * (*b).into();
     }
     s
 }
@@ -91,8 +74,8 @@ impl<'m> Blend<'m> {
         let store = self.model.store();
         let n = store.n();
         let z = match store.z() {
-            Rows::F32(z) => dot_f32(&self.weights, &z[row * n..(row + 1) * n]),
-            Rows::F64(z) => dot_f64(&self.weights, &z[row * n..(row + 1) * n]),
+            Rows::F32(z) => dot(&self.weights, &z[row * n..(row + 1) * n]),
+            Rows::F64(z) => dot(&self.weights, &z[row * n..(row + 1) * n]),
         };
         store.mean()[row] + z
     }

@@ -497,14 +497,7 @@ pub fn build_store(
         let mut unmeasured = vec![1u8; rows];
         for (i, f) in data.files.iter().enumerate() {
             f.copy_raw(r0, &mut raw);
-            // A block may straddle two channels: transform it in per-channel runs.
-            let mut k = 0;
-            while k < rows {
-                let (c, bin0) = ((r0 + k) / bins, (r0 + k) % bins);
-                let len = (rows - k).min(bins - bin0);
-                t.forward_raw_run(c, bin0, &raw[k..k + len], &mut tv[k..k + len]);
-                k += len;
-            }
+            t.forward_raw_rows(bins, r0, &raw, &mut tv);
             for (u, &v) in unmeasured.iter_mut().zip(&raw) {
                 *u &= is_invalid(v) as u8;
             }

@@ -64,6 +64,19 @@ pub trait Transform: Send + Sync {
     /// call per value: `max(0, scale * t)` or `max(0, scale * (e^t - 1))`.
     fn inverse_form(&self, bin: usize) -> InverseForm;
 
+    /// Transform raw file values of rows `r0 .. r0 + raw.len()` (flat
+    /// channel-major indices over tables of `bins` bins a channel) into `out`,
+    /// split into per-channel runs where the range straddles two channels.
+    fn forward_raw_rows(&self, bins: usize, r0: usize, raw: &[f64], out: &mut [f64]) {
+        let mut k = 0;
+        while k < raw.len() {
+            let (c, bin0) = ((r0 + k) / bins, (r0 + k) % bins);
+            let len = (raw.len() - k).min(bins - bin0);
+            self.forward_raw_run(c, bin0, &raw[k..k + len], &mut out[k..k + len]);
+            k += len;
+        }
+    }
+
     /// Transform a run of raw MERL file values of `channel`, bins
     /// `bin0 .. bin0 + raw.len()`, into `out`: the hot loop of a store build.
     fn forward_raw_run(&self, channel: usize, bin0: usize, raw: &[f64], out: &mut [f64]) {
