@@ -8,6 +8,7 @@
 //! file records the result beside its store.
 #![warn(missing_docs)]
 
+pub mod dot;
 pub mod error;
 pub mod fastexp;
 pub mod gplvm;

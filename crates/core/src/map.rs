@@ -21,6 +21,7 @@ use faer::{Accum, Mat, Par};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::dot;
 use crate::error::{CoreError, Progress, Result};
 use crate::fastexp;
 use crate::model::Model;
@@ -134,25 +135,26 @@ impl Model {
         let unmeasured = store.unmeasured();
         let mean = store.mean();
         let chunk = 16384;
-        let partials: Vec<(Vec<[f64; 3]>, [f64; 3])> = rule
+        // Per chunk of the rule: one N-vector per channel, A_c += w z_row (an
+        // AXPY on the stored row, no copy); chunks are folded in order.
+        let partials: Vec<([Vec<f64>; 3], [f64; 3])> = rule
             .bins()
             .par_chunks(chunk)
             .zip(rule.weights().par_chunks(chunk))
             .map(|(bs, ws)| {
-                let mut a = vec![[0.0f64; 3]; n];
+                let mut a: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0f64; n]);
                 let mut m = [0.0f64; 3];
-                let mut z = vec![0.0f64; n];
                 for (&b, &w) in bs.iter().zip(ws) {
-                    for c in 0..3 {
+                    for (c, (ac, mc)) in a.iter_mut().zip(&mut m).enumerate() {
                         let row = c * bins + b as usize;
                         if unmeasured[row] != 0 {
                             continue;
                         }
-                        store.copy_rows(row, &mut z);
-                        for (ai, zi) in a.iter_mut().zip(&z) {
-                            ai[c] += w * zi;
+                        match store.z() {
+                            Rows::F32(z) => dot::axpy(w, &z[row * n..], ac),
+                            Rows::F64(z) => dot::axpy(w, &z[row * n..], ac),
                         }
-                        m[c] += w * mean[row];
+                        *mc += w * mean[row];
                     }
                 }
                 (a, m)
@@ -161,8 +163,10 @@ impl Model {
         let mut a = vec![[0.0f64; 3]; n];
         let mut m = [0.0f64; 3];
         for (pa, pm) in partials {
-            for (ai, pi) in a.iter_mut().zip(pa) {
-                (0..3).for_each(|c| ai[c] += pi[c]);
+            for (c, pc) in pa.iter().enumerate() {
+                for (ai, p) in a.iter_mut().zip(pc) {
+                    ai[c] += p;
+                }
             }
             (0..3).for_each(|c| m[c] += pm[c]);
         }
@@ -195,16 +199,27 @@ impl Model {
         let kernel = self.file().kernel;
         let latent = self.latent();
         let n = latent.nrows();
-        let points: Vec<[f64; 2]> = (0..n).map(|i| [latent[(i, 0)], latent[(i, 1)]]).collect();
-        let (xs, ys): (Vec<f64>, Vec<f64>) = points.iter().map(|p| (p[0], p[1])).unzip();
+        // The RBF is separable: k(x, y)_i = e^(-(x - x_i)^2 / 2l^2) e^(-(y - y_i)^2 / 2l^2),
+        // so one factor per pixel column and one per pixel row (N each) give
+        // every pixel's k(x) with N multiplications and no exponential.
         let inv2l2 = 1.0 / (2.0 * kernel.length_scale * kernel.length_scale);
-        // k(p) for all materials: a loop the compiler vectorises (fastexp).
-        let kvec = |p: [f64; 2], out: &mut [f64]| {
-            for ((o, x), y) in out.iter_mut().zip(&xs).zip(&ys) {
-                let r2 = (x - p[0]) * (x - p[0]) + (y - p[1]) * (y - p[1]);
-                *o = fastexp::exp(-r2 * inv2l2);
+        let factors = |count: usize, axis: usize, centre: &dyn Fn(usize) -> f64| -> Vec<f64> {
+            let mut f = vec![0.0; count * n];
+            for (k, out) in f.chunks_exact_mut(n).enumerate() {
+                let c = centre(k);
+                for (i, o) in out.iter_mut().enumerate() {
+                    let d = latent[(i, axis)] - c;
+                    *o = (-d * d * inv2l2).exp();
+                }
             }
+            f
         };
+        let ex = factors(width, 0, &|px| {
+            view.pixel_to_latent(px as f64, 0.0, width, height)[0]
+        });
+        let ey = factors(height, 1, &|py| {
+            view.pixel_to_latent(0.0, py as f64, width, height)[1]
+        });
         let mut rgb = vec![[0.0f32; 3]; width * height];
         progress.start("map", height as u64);
         let method = match samples {
@@ -221,16 +236,17 @@ impl Model {
                 let cols: Vec<Vec<f64>> = (0..3)
                     .map(|c| (0..n).map(|i| b[(i, c)]).collect())
                     .collect();
+                // albedo(x, y)_c = m_c + sum_i ex_i(x) (ey_i(y) B_ic): per row, the
+                // column factors meet one N-vector per channel.
                 rgb.par_chunks_mut(width).enumerate().for_each(|(py, row)| {
-                    let mut k = vec![0.0; n];
-                    for (px, out) in row.iter_mut().enumerate() {
-                        kvec(
-                            view.pixel_to_latent(px as f64, py as f64, width, height),
-                            &mut k,
-                        );
-                        for (o, (col, mc)) in out.iter_mut().zip(cols.iter().zip(m)) {
-                            let s: f64 = k.iter().zip(col).map(|(a, b)| a * b).sum();
-                            *o = (mc + s) as f32;
+                    let ey = &ey[py * n..(py + 1) * n];
+                    let v: Vec<Vec<f64>> = cols
+                        .iter()
+                        .map(|col| ey.iter().zip(col).map(|(e, b)| e * b).collect())
+                        .collect();
+                    for (out, ex) in row.iter_mut().zip(ex.chunks_exact(n)) {
+                        for (o, (v, mc)) in out.iter_mut().zip(v.iter().zip(m)) {
+                            *o = (mc + dot::dot(v, ex)) as f32;
                         }
                     }
                     progress.advance(1);
@@ -274,13 +290,11 @@ impl Model {
                 let weight: Vec<f64> = rows.iter().map(|x| x.2).collect();
                 rgb.par_chunks_mut(width).enumerate().for_each(|(py, out)| {
                     let mut kx = Mat::<f64>::zeros(n, width);
-                    let mut k = vec![0.0; n];
-                    for px in 0..width {
-                        kvec(
-                            view.pixel_to_latent(px as f64, py as f64, width, height),
-                            &mut k,
-                        );
-                        k.iter().enumerate().for_each(|(i, v)| kx[(i, px)] = *v);
+                    let ey = &ey[py * n..(py + 1) * n];
+                    for (px, ex) in ex.chunks_exact(n).enumerate() {
+                        for (i, (a, b)) in ex.iter().zip(ey).enumerate() {
+                            kx[(i, px)] = a * b;
+                        }
                     }
                     let mut vbuf = vec![0.0f64; r * width];
                     let v = faer::MatMut::from_column_major_slice_mut(&mut vbuf, r, width);

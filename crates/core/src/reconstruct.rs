@@ -5,16 +5,24 @@
 //! `w = K^-1 k(x)`. It computes only what is asked: one bin (O(N) per
 //! channel, one contiguous row of the store each), a batch of directions,
 //! or the whole table (one streaming pass over the store, in parallel).
-//! Every path goes through [`Blend::value`]'s arithmetic, so a point query
-//! and the same bin of a full table agree bit for bit.
+//! A bin once computed is remembered, so a renderer that asks for the same
+//! bins again and again (every frame of a lit sphere does) pays the O(N)
+//! sum once per bin; the memo is a lazily allocated table of 8-byte slots
+//! that costs no memory until queries touch it. Every path goes through
+//! [`crate::dot`] and [`Transform::inverse_run`](crate::transform::Transform::inverse_run),
+//! so a point query and the same bin of a full table agree bit for bit.
 //!
 //! Outputs are reflectance clamped to `>= 0` (a weighted sum of BRDFs can go
 //! negative); bins that no input material measured keep MERL's invalid marker.
+
+use std::sync::OnceLock;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use brdf_merl::table::raw_from_physical;
 use brdf_merl::{INVALID, MerlTable, Vec3};
 use rayon::prelude::*;
 
+use crate::dot;
 use crate::error::Result;
 use crate::model::Model;
 use crate::store::Rows;
@@ -24,26 +32,40 @@ pub struct Blend<'m> {
     model: &'m Model,
     x: Vec<f64>,
     weights: Vec<f64>,
+    /// `value(channel, bin)` of every row asked so far (see [`Memo`]).
+    memo: OnceLock<Box<[AtomicU64]>>,
 }
 
-/// `w . z_row`, accumulated in f64 with four independent partial sums (fixed
-/// order); f32 store values are widened.
-#[inline]
-fn dot<T: Copy + Into<f64>>(w: &[f64], z: &[T]) -> f64 {
-    let mut acc = [0.0f64; 4];
-    let (wc, wr) = w.split_at(w.len() / 4 * 4);
-    let (zc, zr) = z.split_at(wc.len());
-    for (a, b) in wc.chunks_exact(4).zip(zc.chunks_exact(4)) {
-        for k in 0..4 {
-            acc[k] += a[k] * b[k].into();
+/// Encoding of the memo's slots: a value is stored as its bits XOR a NaN
+/// pattern, so the zeroed slot (the bits of that NaN, which no query
+/// produces) means "not computed yet", and a second NaN pattern marks
+/// "unmeasured". Values keep every bit, the sign of zero included.
+struct Memo;
+
+impl Memo {
+    const KEY: u64 = 0x7ff8_a71a_5000_0001;
+    const EMPTY: u64 = 0;
+    const UNMEASURED: u64 = Memo::KEY ^ 0x7ff8_a71a_5000_0002;
+
+    #[inline]
+    fn encode(v: Option<f64>) -> u64 {
+        v.map_or(Memo::UNMEASURED, |v| v.to_bits() ^ Memo::KEY)
+    }
+
+    /// `None` if not computed yet, else the stored answer.
+    #[inline]
+    fn decode(bits: u64) -> Option<Option<f64>> {
+        match bits {
+            Memo::EMPTY => None,
+            Memo::UNMEASURED => Some(None),
+            b => Some(Some(f64::from_bits(b ^ Memo::KEY))),
         }
     }
-    let mut s = (acc[0] + acc[1]) + (acc[2] + acc[3]);
-    for (a, b) in wr.iter().zip(zr) {
-        s += a * (*b).into();
-    }
-    s
 }
+
+/// Rows a worker of [`Blend::table`] handles at once (fixed, so the work
+/// split does not depend on the thread count; results never do).
+const TABLE_CHUNK: usize = 4096;
 
 impl Model {
     /// The blend at latent point `x` (`q` finite coordinates).
@@ -53,6 +75,7 @@ impl Model {
             model: self,
             x: x.to_vec(),
             weights,
+            memo: OnceLock::new(),
         })
     }
 }
@@ -74,22 +97,49 @@ impl<'m> Blend<'m> {
         let store = self.model.store();
         let n = store.n();
         let z = match store.z() {
-            Rows::F32(z) => dot(&self.weights, &z[row * n..(row + 1) * n]),
-            Rows::F64(z) => dot(&self.weights, &z[row * n..(row + 1) * n]),
+            Rows::F32(z) => dot::dot(&self.weights, &z[row * n..(row + 1) * n]),
+            Rows::F64(z) => dot::dot(&self.weights, &z[row * n..(row + 1) * n]),
         };
         store.mean()[row] + z
     }
 
+    /// [`Blend::transformed`] for rows `r0 .. r0 + out.len()`.
+    pub fn transformed_rows(&self, r0: usize, out: &mut [f64]) {
+        let store = self.model.store();
+        let (n, mean) = (store.n(), &store.mean()[r0..]);
+        match store.z() {
+            Rows::F32(z) => dot::rows(&self.weights, &z[r0 * n..], mean, out),
+            Rows::F64(z) => dot::rows(&self.weights, &z[r0 * n..], mean, out),
+        }
+    }
+
     /// Reflectance of `channel` at `bin`, clamped to `>= 0`; `None` where no
-    /// input material was measured.
+    /// input material was measured. Remembered after the first call.
     #[inline]
     pub fn value(&self, channel: usize, bin: usize) -> Option<f64> {
-        let store = self.model.store();
-        let row = channel * store.dims().bins() + bin;
-        if store.unmeasured()[row] != 0 {
+        let bins = self.model.dims().bins();
+        let row = channel * bins + bin;
+        let memo = self
+            .memo
+            .get_or_init(|| bytemuck::zeroed_slice_box(3 * bins));
+        if let Some(v) = Memo::decode(memo[row].load(Ordering::Relaxed)) {
+            return v;
+        }
+        let v = self.compute(row, bins);
+        memo[row].store(Memo::encode(v), Ordering::Relaxed);
+        v
+    }
+
+    /// [`Blend::value`] of store row `row` without the memo.
+    fn compute(&self, row: usize, bins: usize) -> Option<f64> {
+        if self.model.store().unmeasured()[row] != 0 {
             return None;
         }
-        Some(self.model.transform.inverse(bin, self.transformed(row)))
+        let mut out = [0.0];
+        self.model
+            .transform
+            .inverse_run(row % bins, &[self.transformed(row)], &mut out);
+        Some(out[0])
     }
 
     /// RGB reflectance at `bin`; `None` where some channel was never measured.
@@ -107,30 +157,50 @@ impl<'m> Blend<'m> {
         self.rgb(self.model.dims().bin_of_directions(wi, wo)?)
     }
 
-    /// [`Blend::eval`] for many direction pairs.
+    /// [`Blend::eval`] for many direction pairs, in parallel (fixed chunks;
+    /// the answers do not depend on the thread count).
     pub fn eval_batch(&self, pairs: &[(Vec3, Vec3)]) -> Vec<Option<[f64; 3]>> {
-        pairs.iter().map(|(wi, wo)| self.eval(*wi, *wo)).collect()
+        pairs
+            .par_iter()
+            .with_min_len(1024)
+            .map(|(wi, wo)| self.eval(*wi, *wo))
+            .collect()
     }
 
     /// The whole table in MERL raw units: one parallel pass over the store.
     pub fn table(&self) -> MerlTable {
         let dims = self.model.dims();
         let bins = dims.bins();
+        let store = self.model.store();
+        let unmeasured = store.unmeasured();
         let mut values = vec![0.0f64; dims.values()];
         values
-            .par_chunks_mut(8192)
+            .par_chunks_mut(TABLE_CHUNK)
             .enumerate()
-            .for_each(|(k, out)| {
-                let r0 = k * 8192;
-                for (j, o) in out.iter_mut().enumerate() {
-                    let row = r0 + j;
-                    let (c, bin) = (row / bins, row % bins);
-                    *o = match self.value(c, bin) {
-                        Some(v) => raw_from_physical(c, v),
-                        None => INVALID,
-                    };
-                }
-            });
+            .for_each_init(
+                || vec![0.0f64; TABLE_CHUNK],
+                |t, (k, out)| {
+                    let r0 = k * TABLE_CHUNK;
+                    let t = &mut t[..out.len()];
+                    self.transformed_rows(r0, t);
+                    // Split the chunk where it crosses from one channel to the next.
+                    let mut j = 0;
+                    while j < out.len() {
+                        let (c, bin0) = ((r0 + j) / bins, (r0 + j) % bins);
+                        let len = (out.len() - j).min(bins - bin0);
+                        let run = &mut out[j..j + len];
+                        self.model.transform.inverse_run(bin0, &t[j..j + len], run);
+                        for (o, &u) in run.iter_mut().zip(&unmeasured[r0 + j..r0 + j + len]) {
+                            *o = if u != 0 {
+                                INVALID
+                            } else {
+                                raw_from_physical(c, *o)
+                            };
+                        }
+                        j += len;
+                    }
+                },
+            );
         MerlTable::from_raw(dims, values).expect("length matches dims")
     }
 }

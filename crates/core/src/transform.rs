@@ -64,6 +64,14 @@ pub trait Transform: Send + Sync {
     /// call per value: `max(0, scale * t)` or `max(0, scale * (e^t - 1))`.
     fn inverse_form(&self, bin: usize) -> InverseForm;
 
+    /// [`Transform::inverse`] for bins `bin0 .. bin0 + t.len()` of one
+    /// channel: the same bits, without a call per value.
+    fn inverse_run(&self, bin0: usize, t: &[f64], out: &mut [f64]) {
+        for (k, (o, &v)) in out.iter_mut().zip(t).enumerate() {
+            *o = self.inverse(bin0 + k, v);
+        }
+    }
+
     /// Transform raw file values of rows `r0 .. r0 + raw.len()` (flat
     /// channel-major indices over tables of `bins` bins a channel) into `out`,
     /// split into per-channel runs where the range straddles two channels.
@@ -110,6 +118,12 @@ impl Transform for Raw {
 
     fn inverse_form(&self, _bin: usize) -> InverseForm {
         InverseForm::Linear(1.0)
+    }
+
+    fn inverse_run(&self, _bin0: usize, t: &[f64], out: &mut [f64]) {
+        for (o, &v) in out.iter_mut().zip(t) {
+            *o = v.max(0.0);
+        }
     }
 
     fn forward_raw_run(&self, channel: usize, _bin0: usize, raw: &[f64], out: &mut [f64]) {
@@ -160,11 +174,43 @@ impl Transform for CosineLog {
         let c = self.cos[bin];
         InverseForm::Exp(if c < MIN_COS { 0.0 } else { 1.0 / c })
     }
+
+    fn inverse_run(&self, bin0: usize, t: &[f64], out: &mut [f64]) {
+        let cos = &self.cos[bin0..bin0 + t.len()];
+        for ((o, &v), &c) in out.iter_mut().zip(t).zip(cos) {
+            *o = if c < MIN_COS {
+                0.0
+            } else {
+                (v.exp_m1() / c).max(0.0)
+            };
+        }
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn inverse_run_is_inverse_per_value() {
+        let dims = Dims::new(10, 10, 20).unwrap();
+        let t_values: Vec<f64> = (0..dims.bins())
+            .map(|b| (b as f64 * 0.37).sin() * 3.0)
+            .collect();
+        for kind in [TransformKind::Raw, TransformKind::Log] {
+            let t = kind.build(dims);
+            let mut run = vec![0.0; dims.bins() - 13];
+            t.inverse_run(13, &t_values[13..], &mut run);
+            for (k, v) in run.iter().enumerate() {
+                let bin = 13 + k;
+                assert_eq!(
+                    v.to_bits(),
+                    t.inverse(bin, t_values[bin]).to_bits(),
+                    "{kind:?} {bin}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn transforms_invert() {

@@ -154,6 +154,62 @@ fn point_queries_equal_the_full_table() {
     }
 }
 
+/// The memo: answers do not depend on query order, repetition or threads,
+/// and match an independent dense computation of the same bins.
+#[test]
+fn remembered_point_queries_match_fresh_and_dense_ones() {
+    let tmp = tempfile::tempdir().unwrap();
+    let m = Model::open(fit(tmp.path(), TransformKind::Raw, Precision::F64)).unwrap();
+    let x = [0.4, -0.3];
+    let w = dense_weights(&m, &x);
+    let bins = DIMS.bins();
+    let (forward, backward) = (m.at(&x).unwrap(), m.at(&x).unwrap());
+    let cold: Vec<_> = (0..bins).map(|bin| forward.rgb(bin)).collect();
+    for _ in 0..2 {
+        for bin in (0..bins).rev() {
+            let again = backward.rgb(bin);
+            assert_eq!(
+                again.map(|v| v.map(f64::to_bits)),
+                cold[bin].map(|v| v.map(f64::to_bits)),
+                "bin {bin}"
+            );
+        }
+    }
+    for (bin, got) in cold.iter().enumerate() {
+        for c in 0..3 {
+            let row = c * bins + bin;
+            let got = got.map(|v| v[c]);
+            if m.store().unmeasured()[row] != 0 {
+                assert_eq!(forward.value(c, bin), None);
+                continue;
+            }
+            let terms: Vec<f64> = (0..w.len()).map(|i| w[i] * z(&m, row, i)).collect();
+            let mean = m.store().mean()[row];
+            let want = (mean + terms.iter().sum::<f64>()).max(0.0);
+            // The two weight solves differ by cond(K) eps; the sum may cancel.
+            let scale = mean.abs() + terms.iter().map(|t| t.abs()).sum::<f64>();
+            let v = forward.value(c, bin).unwrap();
+            assert!((v - want).abs() <= 1e-8 * scale, "{row}: {v} vs {want}");
+            if let Some(g) = got {
+                assert_eq!(g.to_bits(), v.to_bits());
+            }
+        }
+    }
+    // A parallel batch on a fresh blend answers what a serial loop does.
+    let pairs: Vec<_> = (0..20_000)
+        .map(|k| {
+            (
+                brdf_merl::angles::direction(0.02 * (k % 70) as f64, 0.1),
+                brdf_merl::angles::direction(0.3, 0.001 * k as f64),
+            )
+        })
+        .collect();
+    let batch = m.at(&x).unwrap().eval_batch(&pairs);
+    for (p, got) in pairs.iter().zip(&batch) {
+        assert_eq!(*got, forward.eval(p.0, p.1));
+    }
+}
+
 #[test]
 fn written_reconstruction_reads_back_with_the_merl_reader() {
     let tmp = tempfile::tempdir().unwrap();

@@ -25,7 +25,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 
 use rayon::prelude::*;
 
-use crate::angles::{Dims, HalfDiff};
+use crate::angles::Dims;
 use crate::table::MerlTable;
 
 /// A quadrature rule for the albedo integral on a MERL grid.
@@ -38,19 +38,24 @@ pub struct Quadrature {
 
 /// Integrand weight at a point of `(u, theta_d, phi_d)` space, per unit volume.
 fn density(u: f64, theta_d: f64, phi_d: f64) -> f64 {
-    let theta_h = u * u * FRAC_PI_2;
-    let hd = HalfDiff {
-        theta_h,
-        phi_h: 0.0,
-        theta_d,
-        phi_d,
-    };
-    let (ci, co) = hd.cosines();
-    if ci <= 0.0 || co <= 0.0 {
+    let (sh, ch) = (u * u * FRAC_PI_2).sin_cos();
+    let (sd, cd) = theta_d.sin_cos();
+    density_from(u, (sh, ch), (sd, cd), phi_d.cos())
+}
+
+/// [`density`] from the sines and cosines of `theta_h = u^2 pi / 2` and
+/// `theta_d`, and `cos phi_d`: arithmetic only, for the rules' triple loops.
+/// With `a = cos theta_h cos theta_d` and `b = sin theta_h sin theta_d cos phi_d`,
+/// `cos theta_i = a - b` and `cos theta_o = a + b` ([`HalfDiff::cosines`](crate::angles::HalfDiff::cosines)),
+/// so both are positive exactly when `a > |b|`, and their product is `a^2 - b^2`.
+#[inline]
+fn density_from(u: f64, (sh, ch): (f64, f64), (sd, cd): (f64, f64), cos_phi_d: f64) -> f64 {
+    let a = ch * cd;
+    let b = sh * sd * cos_phi_d;
+    if a - b <= 0.0 || a + b <= 0.0 {
         return 0.0;
     }
-    let (sd, cd) = theta_d.sin_cos();
-    16.0 * PI * u * theta_h.sin() * cd * sd * ci * co
+    16.0 * PI * u * sh * cd * sd * ((a - b) * (a + b))
 }
 
 impl Quadrature {
@@ -64,15 +69,19 @@ impl Quadrature {
         let (du, dt, dp) = (1.0 / nu as f64, FRAC_PI_2 / nt as f64, PI / np as f64);
         let row = dims.theta_d * dims.phi_d;
         let mut dense = vec![0.0f64; dims.bins()];
+        let theta_d: Vec<(f64, f64)> = (0..nt)
+            .map(|it| ((it as f64 + 0.5) * dt).sin_cos())
+            .collect();
+        let cos_phi_d: Vec<f64> = (0..np).map(|ip| ((ip as f64 + 0.5) * dp).cos()).collect();
+        let volume = du * dt * dp;
         dense.par_chunks_mut(row).enumerate().for_each(|(ih, out)| {
             for su in 0..sub {
                 let u = ((ih * sub + su) as f64 + 0.5) * du;
-                for it in 0..nt {
-                    let td = (it as f64 + 0.5) * dt;
-                    for ip in 0..np {
-                        let pd = (ip as f64 + 0.5) * dp;
-                        out[(it / sub) * dims.phi_d + ip / sub] +=
-                            density(u, td, pd) * du * dt * dp;
+                let h = (u * u * FRAC_PI_2).sin_cos();
+                for (it, &d) in theta_d.iter().enumerate() {
+                    let out = &mut out[(it / sub) * dims.phi_d..][..dims.phi_d];
+                    for (ip, &cp) in cos_phi_d.iter().enumerate() {
+                        out[ip / sub] += density_from(u, h, d, cp) * volume;
                     }
                 }
             }
@@ -178,9 +187,39 @@ impl Quadrature {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::angles::HalfDiff;
 
     fn lambert(dims: Dims, rho: [f64; 3]) -> MerlTable {
         MerlTable::from_fn(dims, |_| Some(rho.map(|r| r / PI)))
+    }
+
+    #[test]
+    fn density_matches_the_cosines_of_the_half_diff_pair() {
+        for k in 0..20_000 {
+            let (u, td, pd) = (
+                (k as f64 * 0.618_034).fract(),
+                (k as f64 * 0.414_214).fract() * FRAC_PI_2,
+                (k as f64 * 0.732_051).fract() * PI,
+            );
+            let theta_h = u * u * FRAC_PI_2;
+            let (ci, co) = HalfDiff {
+                theta_h,
+                phi_h: 0.0,
+                theta_d: td,
+                phi_d: pd,
+            }
+            .cosines();
+            let want = if ci <= 0.0 || co <= 0.0 {
+                0.0
+            } else {
+                16.0 * PI * u * theta_h.sin() * td.cos() * td.sin() * ci * co
+            };
+            let got = density(u, td, pd);
+            assert!(
+                (got - want).abs() <= 1e-12 * want.abs().max(1e-3),
+                "{k}: {got} vs {want}"
+            );
+        }
     }
 
     #[test]
