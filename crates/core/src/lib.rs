@@ -17,6 +17,7 @@ pub mod incremental;
 pub mod kernel;
 pub mod likelihood;
 pub mod locate;
+pub mod loo;
 pub mod map;
 pub mod model;
 pub mod optim;

@@ -93,6 +93,54 @@ pub struct ModelFile {
     pub store: StoreRef,
 }
 
+impl ModelFile {
+    /// The model file of `fit` on `store` (materials `names`, in store
+    /// order; `gram_rows` the Gram matrix before normalisation, `gram` the
+    /// fitted data; the store named `store_name` beside the model file).
+    /// Checksums the store.
+    pub fn new(
+        names: Vec<String>,
+        fit: &Fit,
+        store: &Store,
+        gram_rows: Vec<Vec<f64>>,
+        gram: &GramData,
+        store_name: String,
+    ) -> ModelFile {
+        let dims = store.dims();
+        let o = &fit.outcome;
+        ModelFile {
+            format: FORMAT.into(),
+            version: VERSION,
+            names,
+            latent: (0..o.latent.nrows())
+                .map(|i| (0..o.latent.ncols()).map(|c| o.latent[(i, c)]).collect())
+                .collect(),
+            kernel: fit.kernel,
+            transform: store.transform(),
+            precision: store.precision(),
+            dims: [dims.theta_h, dims.theta_d, dims.phi_d],
+            d: store.rows(),
+            signal_variance: gram.scale2(),
+            fit: FitRecord {
+                optimizer: fit.optimizer,
+                initial_cost: o.initial_cost,
+                cost: o.cost,
+                iterations: o.iterations,
+                evaluations: o.evaluations,
+                pattern_moves: o.pattern_moves,
+                drift: o.drift,
+                eigenvalues: fit.eigenvalues.clone(),
+            },
+            gram: gram_rows,
+            store: StoreRef {
+                path: store_name,
+                bytes: store.len_bytes(),
+                checksum: format!("{:016x}", store.checksum()),
+            },
+        }
+    }
+}
+
 /// An opened model: the file, its store mapped, `K` factorised.
 pub struct Model {
     path: PathBuf,
@@ -402,41 +450,18 @@ fn fit_staged(
     let fit = options.params.fit(&gram, progress)?;
     let optimise_time = t2.elapsed();
     let t3 = Instant::now();
-    let dims = store.dims();
-    let o = &fit.outcome;
-    let file = ModelFile {
-        format: FORMAT.into(),
-        version: VERSION,
-        names: data.names.clone(),
-        latent: (0..o.latent.nrows())
-            .map(|i| (0..o.latent.ncols()).map(|c| o.latent[(i, c)]).collect())
-            .collect(),
-        kernel: fit.kernel,
-        transform: options.transform,
-        precision: options.precision,
-        dims: [dims.theta_h, dims.theta_d, dims.phi_d],
-        d: store.rows(),
-        signal_variance: gram.scale2(),
-        fit: FitRecord {
-            optimizer: fit.optimizer,
-            initial_cost: o.initial_cost,
-            cost: o.cost,
-            iterations: o.iterations,
-            evaluations: o.evaluations,
-            pattern_moves: o.pattern_moves,
-            drift: o.drift,
-            eigenvalues: fit.eigenvalues.clone(),
-        },
-        gram: gram_rows,
-        store: StoreRef {
-            path: store_path
-                .file_name()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default(),
-            bytes: store.len_bytes(),
-            checksum: format!("{:016x}", store.checksum()),
-        },
-    };
+    let store_name = store_path
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let file = ModelFile::new(
+        data.names.clone(),
+        &fit,
+        &store,
+        gram_rows,
+        &gram,
+        store_name,
+    );
     std::fs::rename(staging, store_path).map_err(|e| CoreError::io(store_path, e))?;
     Model::write_file(model, &file)?;
     let save_time = t3.elapsed();

@@ -1,0 +1,630 @@
+//! Leave-one-out (LOO) reconstruction error, in closed form, for the GPLVM
+//! and for PCA, in one streaming pass over the store.
+//!
+//! Every method here predicts material `i` as a linear combination of the
+//! stored rows: `z_hat_i = sum_j P_ij z_j` (centred values `z`, so the
+//! prediction in transformed space is `mean + z_hat_i`). A method is an
+//! `N x N` *predictor* matrix `P`; [`evaluate`] applies many predictors to
+//! every row of the store at once (one matrix product per block of rows) and
+//! folds the squared errors per material, never holding `Z` on the heap.
+//!
+//! **GPLVM, held out.** With `A = K^-1` (`K` with the noise on its diagonal,
+//! latent points and hyperparameters as fitted on all `N` materials: no
+//! refit), the GP prediction of material `i` from the others is
+//! `z_i - (A z)_i / A_ii` (the classic LOO identity). The store is centred
+//! by the mean of all `N` materials, which includes the held-out one; with
+//! `refit_mean` the mean is re-estimated without `i` as well. That changes
+//! every other row by `c = z_i / (N - 1)`, and the GP prediction of the
+//! constant vector gives the correction in closed form too:
+//! `z_hat_i = z_i - (A z)_i / A_ii - g_i z_i / (N - 1)`, `g_i = (A 1)_i / A_ii`.
+//!
+//! **PCA, held out.** For each `i`, the Gram matrix of the other `N - 1`
+//! materials re-centred by their own mean is `Y'` (from `Y`, no data pass);
+//! projecting the held-out material on their top `q` principal directions is
+//! again a combination of the others' rows: `w = U_q S_q^-1 U_q^T b` with
+//! `b_j = <z'_j, z'_i>`; one eigen-decomposition of an `(N-1) x (N-1)` matrix
+//! per material.
+//!
+//! **PCA, in sample.** `P = U_q U_q^T` (eigenvectors of `Y`): the projection
+//! of every material on the top `q` directions of all `N`, itself included.
+//! Its total squared error in transformed space is the sum of the discarded
+//! eigenvalues of `Y` ([`discarded`]); it is not a held-out error.
+
+use brdf_merl::Dims;
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, MatRef, Par, Side};
+use rayon::prelude::*;
+
+use crate::error::{CoreError, Progress, Result};
+use crate::kernel::Kernel;
+use crate::likelihood::factor;
+use crate::store::{Rows, Store};
+use crate::transform::{InverseForm, TransformKind};
+
+/// Rows of the store per block of the LOO pass.
+const BLOCK: usize = 1024;
+/// Blocks are folded in this many fixed groups, in order: the sums do not
+/// depend on the thread count.
+const GROUPS: usize = 64;
+
+/// The GP leave-one-out predictor of latent points `latent` (`N x q`).
+pub fn gp_predictor(
+    kernel: &Kernel,
+    latent: MatRef<'_, f64>,
+    refit_mean: bool,
+) -> Result<Mat<f64>> {
+    let n = latent.nrows();
+    if n < 2 {
+        return Err(CoreError::InvalidParams(format!(
+            "leave-one-out needs at least 2 materials, got {n}"
+        )));
+    }
+    let (_, a) = factor(kernel.matrix(latent).as_ref(), "leave-one-out")?;
+    let g: Vec<f64> = (0..n)
+        .map(|i| (0..n).map(|j| a[(i, j)]).sum::<f64>() / a[(i, i)])
+        .collect();
+    Ok(Mat::from_fn(n, n, |i, j| {
+        let delta = if i == j { 1.0 } else { 0.0 };
+        let mut p = delta - a[(i, j)] / a[(i, i)];
+        if refit_mean && i == j {
+            p -= g[i] / (n - 1) as f64;
+        }
+        p
+    }))
+}
+
+/// Eigenvalues (descending) and eigenvectors (same order, as columns) of a
+/// symmetric matrix.
+fn eigen_desc(y: MatRef<'_, f64>) -> Result<(Vec<f64>, Mat<f64>)> {
+    let n = y.nrows();
+    let evd = y
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|_| CoreError::InvalidParams("eigen-decomposition failed".into()))?;
+    let s = evd.S().column_vector();
+    let u = evd.U();
+    let vals = (0..n).rev().map(|k| s[k]).collect();
+    let vecs = Mat::from_fn(n, n, |i, k| u[(i, n - 1 - k)]);
+    Ok((vals, vecs))
+}
+
+/// Components kept: the first `q` whose eigenvalue is meaningfully positive.
+fn kept(vals: &[f64], q: usize) -> usize {
+    let top = vals.first().copied().unwrap_or(0.0).max(0.0);
+    vals.iter()
+        .take(q)
+        .take_while(|&&s| s > 1e-12 * top && s > 0.0)
+        .count()
+}
+
+/// The PCA leave-one-out predictor with `q` components, from the Gram
+/// matrix `y` of the centred data.
+pub fn pca_predictor(y: MatRef<'_, f64>, q: usize) -> Result<Mat<f64>> {
+    let n = y.nrows();
+    if n < 3 {
+        return Err(CoreError::InvalidParams(format!(
+            "PCA leave-one-out needs at least 3 materials, got {n}"
+        )));
+    }
+    let m = (n - 1) as f64;
+    let mut p = Mat::<f64>::zeros(n, n);
+    for i in 0..n {
+        let others: Vec<usize> = (0..n).filter(|&j| j != i).collect();
+        // Re-centred by the others' mean: z'_j = z_j + z_i / (N - 1).
+        let yp = Mat::from_fn(n - 1, n - 1, |a, b| {
+            let (j, k) = (others[a], others[b]);
+            y[(j, k)] + (y[(j, i)] + y[(k, i)]) / m + y[(i, i)] / (m * m)
+        });
+        // The held-out material re-centred: z'_i = z_i N / (N - 1).
+        let b: Vec<f64> = others
+            .iter()
+            .map(|&j| (y[(j, i)] + y[(i, i)] / m) * n as f64 / m)
+            .collect();
+        let (vals, u) = eigen_desc(yp.as_ref())?;
+        let mut w = vec![0.0; n - 1];
+        for k in 0..kept(&vals, q) {
+            let proj: f64 = (0..n - 1).map(|a| u[(a, k)] * b[a]).sum::<f64>() / vals[k];
+            w.iter_mut()
+                .enumerate()
+                .for_each(|(a, wa)| *wa += u[(a, k)] * proj);
+        }
+        // mean_-i + sum_j w_j z'_j = mean + sum_j w_j z_j + (sum w - 1) z_i / (N - 1).
+        for (a, &j) in others.iter().enumerate() {
+            p[(i, j)] = w[a];
+        }
+        p[(i, i)] = (w.iter().sum::<f64>() - 1.0) / m;
+    }
+    Ok(p)
+}
+
+/// The in-sample PCA projector `U_q U_q^T` with `q` components.
+pub fn pca_in_sample_predictor(y: MatRef<'_, f64>, q: usize) -> Result<Mat<f64>> {
+    let n = y.nrows();
+    let (vals, u) = eigen_desc(y)?;
+    let k = kept(&vals, q);
+    Ok(Mat::from_fn(n, n, |i, j| {
+        (0..k).map(|c| u[(i, c)] * u[(j, c)]).sum()
+    }))
+}
+
+/// Sum of the eigenvalues of `y` beyond the first `q`: the in-sample
+/// squared residual of PCA with `q` components (transformed space, all rows).
+pub fn discarded(y: MatRef<'_, f64>, q: usize) -> Result<f64> {
+    let (vals, _) = eigen_desc(y)?;
+    Ok(vals.iter().skip(q).map(|v| v.max(0.0)).sum())
+}
+
+/// Squared errors of one predictor, per material.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Errors {
+    /// Sum over all rows of the squared error in transformed space.
+    pub transformed: Vec<f64>,
+    /// Sum over the scored rows of the squared error of the reflectance
+    /// (1/sr), after the inverse transform and the clamp to `>= 0`.
+    pub raw: Vec<f64>,
+    /// Sum over the scored rows of the squared error of `log(1 + f cos_i cos_o)`.
+    pub log: Vec<f64>,
+}
+
+impl Errors {
+    /// RMSE of material `i`'s reflectance over the scored rows.
+    pub fn raw_rmse(&self, i: usize, scored: usize) -> f64 {
+        (self.raw[i] / scored.max(1) as f64).sqrt()
+    }
+
+    /// RMSE of material `i`'s cosine-weighted log over the scored rows.
+    pub fn log_rmse(&self, i: usize, scored: usize) -> f64 {
+        (self.log[i] / scored.max(1) as f64).sqrt()
+    }
+
+    /// RMSE over all materials and scored rows (reflectance).
+    pub fn raw_total(&self, scored: usize) -> f64 {
+        (self.raw.iter().sum::<f64>() / (scored.max(1) * self.raw.len()) as f64).sqrt()
+    }
+
+    /// RMSE over all materials and scored rows (cosine-weighted log).
+    pub fn log_total(&self, scored: usize) -> f64 {
+        (self.log.iter().sum::<f64>() / (scored.max(1) * self.log.len()) as f64).sqrt()
+    }
+}
+
+/// The result of [`evaluate`]: errors per predictor, and which rows scored.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Evaluation {
+    /// One entry per predictor, in the order given.
+    pub errors: Vec<Errors>,
+    /// Rows scored for reflectance and log errors: measured by some input
+    /// material and not grazing (`cos_i cos_o >= 1e-6`, where the log
+    /// transform recovers nothing).
+    pub scored_rows: usize,
+    /// All rows of the store.
+    pub rows: usize,
+}
+
+/// `cos_i cos_o` of each bin and whether the log transform treats it as grazing.
+fn cosines(dims: Dims) -> (Vec<f64>, Vec<bool>) {
+    let log = TransformKind::Log.build(dims);
+    (0..dims.bins())
+        .map(|b| {
+            let (ci, co) = dims.angles_of(b).cosines();
+            let grazing = matches!(log.inverse_form(b), InverseForm::Exp(s) if s == 0.0);
+            ((ci * co).max(0.0), grazing)
+        })
+        .unzip()
+}
+
+/// `ln(1 + y)` for `y >= 0`, vectorisable: exponent and mantissa split by
+/// bit operations, then the atanh series of `ln(m)`, `m` in `[sqrt(1/2), sqrt(2))`.
+/// Absolute error below 1e-15 (tested); for the error metrics only.
+#[inline(always)]
+pub fn ln_1p(y: f64) -> f64 {
+    let u = 1.0 + y.max(0.0);
+    let bits = u.to_bits();
+    // Scale the mantissa into [sqrt(1/2), sqrt(2)) by shifting the cut to
+    // 0x3fe6a09e667f3bcd (sqrt(1/2)).
+    let shifted = bits.wrapping_sub(0x3fe6_a09e_667f_3bcd);
+    let m = f64::from_bits((shifted & 0x000f_ffff_ffff_ffff).wrapping_add(0x3fe6_a09e_667f_3bcd));
+    // u = 2^k m with k = shifted >> 52 (u >= 1 keeps it small and positive),
+    // turned into a float without an int -> float conversion (vectorisable).
+    let kf = f64::from_bits(0x4330_0000_0000_0000 | (shifted >> 52)) - 4_503_599_627_370_496.0;
+    let s = (m - 1.0) / (m + 1.0);
+    let s2 = s * s;
+    let mut p = 1.0 / 21.0;
+    p = p * s2 + 1.0 / 19.0;
+    p = p * s2 + 1.0 / 17.0;
+    p = p * s2 + 1.0 / 15.0;
+    p = p * s2 + 1.0 / 13.0;
+    p = p * s2 + 1.0 / 11.0;
+    p = p * s2 + 1.0 / 9.0;
+    p = p * s2 + 1.0 / 7.0;
+    p = p * s2 + 1.0 / 5.0;
+    p = p * s2 + 1.0 / 3.0;
+    p = p * s2 + 1.0;
+    kf * std::f64::consts::LN_2 + 2.0 * s * p
+}
+
+/// Apply every predictor to every row of `store` and sum the squared errors
+/// per material: one streaming pass, parallel over fixed groups of blocks
+/// folded in order (same bits for any thread count).
+pub fn evaluate(
+    store: &Store,
+    predictors: &[Mat<f64>],
+    progress: &dyn Progress,
+) -> Result<Evaluation> {
+    let n = store.n();
+    let count = predictors.len();
+    if let Some(p) = predictors.iter().find(|p| p.nrows() != n || p.ncols() != n) {
+        return Err(CoreError::InvalidParams(format!(
+            "predictor is {}x{}, the store has {n} materials",
+            p.nrows(),
+            p.ncols()
+        )));
+    }
+    let mn = count * n;
+    // All predictors stacked: row m * N + i predicts material i by method m.
+    let stacked = Mat::from_fn(mn, n, |r, j| predictors[r / n][(r % n, j)]);
+    let dims = store.dims();
+    let bins = dims.bins();
+    let rows = store.rows();
+    let (cos, grazing) = cosines(dims);
+    let log_space = store.transform() == TransformKind::Log;
+    let transform = store.transform().build(dims);
+    let blocks = rows.div_ceil(BLOCK);
+    let groups = GROUPS.min(blocks.max(1));
+    let unmeasured = store.unmeasured();
+    let mean = store.mean();
+    progress.start("loo", rows as u64);
+    let partials: Vec<(Vec<f64>, Vec<f64>, Vec<f64>, usize)> = (0..groups)
+        .into_par_iter()
+        .map(|g| {
+            let (mut et, mut ef, mut el) = (vec![0.0; mn], vec![0.0; mn], vec![0.0; mn]);
+            let mut scored = 0usize;
+            let mut zbuf = vec![0.0f64; BLOCK * n];
+            let mut out = vec![0.0f64; BLOCK * mn];
+            let (mut tt, mut ft, mut lt) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+            for b in (g * blocks / groups)..((g + 1) * blocks / groups) {
+                let r0 = b * BLOCK;
+                let r1 = (r0 + BLOCK).min(rows);
+                let len = r1 - r0;
+                let z = &mut zbuf[..len * n];
+                match store.z() {
+                    Rows::F32(s) => z
+                        .iter_mut()
+                        .zip(&s[r0 * n..r1 * n])
+                        .for_each(|(o, v)| *o = *v as f64),
+                    Rows::F64(s) => z.copy_from_slice(&s[r0 * n..r1 * n]),
+                }
+                let zc = MatRef::from_column_major_slice(z, n, len);
+                let o = faer::MatMut::from_column_major_slice_mut(&mut out[..len * mn], mn, len);
+                matmul(o, Accum::Replace, stacked.as_ref(), zc, 1.0, Par::Seq);
+                for k in 0..len {
+                    let row = r0 + k;
+                    let bin = row % bins;
+                    let m0 = mean[row];
+                    let zr = &z[k * n..(k + 1) * n];
+                    let pred = &out[k * mn..(k + 1) * mn];
+                    for (t, &zi) in tt.iter_mut().zip(zr) {
+                        *t = m0 + zi;
+                    }
+                    for (m, chunk) in pred.chunks_exact(n).enumerate() {
+                        let acc = &mut et[m * n..(m + 1) * n];
+                        for ((a, &p), &t) in acc.iter_mut().zip(chunk).zip(&tt) {
+                            let d = m0 + p - t;
+                            *a += d * d;
+                        }
+                    }
+                    if unmeasured[row] != 0 || grazing[bin] {
+                        continue;
+                    }
+                    scored += 1;
+                    let c = cos[bin];
+                    // Reflectance and cosine-weighted log of the true values.
+                    match transform.inverse_form(bin) {
+                        InverseForm::Exp(s) => {
+                            for ((f, l), &t) in ft.iter_mut().zip(lt.iter_mut()).zip(&tt) {
+                                *f = s * (crate::fastexp::exp(t) - 1.0).max(0.0);
+                                *l = t.max(0.0);
+                            }
+                        }
+                        InverseForm::Linear(s) => {
+                            for ((f, l), &t) in ft.iter_mut().zip(lt.iter_mut()).zip(&tt) {
+                                *f = (s * t).max(0.0);
+                                *l = ln_1p(*f * c);
+                            }
+                        }
+                    }
+                    for (m, chunk) in pred.chunks_exact(n).enumerate() {
+                        let (af, al) = (&mut ef[m * n..(m + 1) * n], &mut el[m * n..(m + 1) * n]);
+                        let it = af
+                            .iter_mut()
+                            .zip(al.iter_mut())
+                            .zip(chunk)
+                            .zip(ft.iter().zip(&lt));
+                        match transform.inverse_form(bin) {
+                            // log(1 + f c) of f = (e^t - 1) / c is t itself (for t >= 0).
+                            InverseForm::Exp(s) if log_space => {
+                                it.for_each(|(((a, l), &p), (&f, &lv))| {
+                                    let t = m0 + p;
+                                    let e = s * (crate::fastexp::exp(t) - 1.0).max(0.0) - f;
+                                    let d = t.max(0.0) - lv;
+                                    *a += e * e;
+                                    *l += d * d;
+                                })
+                            }
+                            InverseForm::Exp(s) => it.for_each(|(((a, l), &p), (&f, &lv))| {
+                                let fp = s * (crate::fastexp::exp(m0 + p) - 1.0).max(0.0);
+                                let (e, d) = (fp - f, ln_1p(fp * c) - lv);
+                                *a += e * e;
+                                *l += d * d;
+                            }),
+                            InverseForm::Linear(s) => it.for_each(|(((a, l), &p), (&f, &lv))| {
+                                let fp = (s * (m0 + p)).max(0.0);
+                                let (e, d) = (fp - f, ln_1p(fp * c) - lv);
+                                *a += e * e;
+                                *l += d * d;
+                            }),
+                        }
+                    }
+                }
+                progress.advance(len as u64);
+            }
+            (et, ef, el, scored)
+        })
+        .collect();
+    progress.finish();
+    let (mut et, mut ef, mut el, mut scored) = (vec![0.0; mn], vec![0.0; mn], vec![0.0; mn], 0);
+    for (pt, pf, pl, ps) in partials {
+        et.iter_mut().zip(pt).for_each(|(a, b)| *a += b);
+        ef.iter_mut().zip(pf).for_each(|(a, b)| *a += b);
+        el.iter_mut().zip(pl).for_each(|(a, b)| *a += b);
+        scored += ps;
+    }
+    let errors = (0..count)
+        .map(|m| Errors {
+            transformed: et[m * n..(m + 1) * n].to_vec(),
+            raw: ef[m * n..(m + 1) * n].to_vec(),
+            log: el[m * n..(m + 1) * n].to_vec(),
+        })
+        .collect();
+    Ok(Evaluation {
+        errors,
+        scored_rows: scored,
+        rows,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::error::NoProgress;
+    use crate::store::{Dataset, Precision, build_store};
+    use brdf_merl::synth::{SplitMix64, database};
+    use faer::linalg::solvers::Solve;
+
+    /// A store of `n` synthetic materials and its centred data as a dense `N x d` matrix.
+    fn small_store(
+        dir: &std::path::Path,
+        n: usize,
+        dims: Dims,
+        transform: TransformKind,
+    ) -> (Store, Mat<f64>) {
+        for m in database(n, 4) {
+            m.brdf
+                .table(dims)
+                .write(dir.join(format!("{}.binary", m.name)))
+                .unwrap();
+        }
+        let data = Dataset::open_dir(dir).unwrap();
+        let out = dir.join(format!("{}.store", transform.name()));
+        let (store, _) = build_store(&data, transform, Precision::F64, &out, &NoProgress).unwrap();
+        let d = store.rows();
+        let mut row = vec![0.0; n];
+        let mut z = Mat::<f64>::zeros(n, d);
+        for j in 0..d {
+            store.copy_rows(j, &mut row);
+            (0..n).for_each(|i| z[(i, j)] = row[i]);
+        }
+        (store, z)
+    }
+
+    fn without(z: MatRef<'_, f64>, i: usize) -> Mat<f64> {
+        let others: Vec<usize> = (0..z.nrows()).filter(|&j| j != i).collect();
+        Mat::from_fn(others.len(), z.ncols(), |a, c| z[(others[a], c)])
+    }
+
+    /// Subtract the column means; return them.
+    fn recentre(z: &mut Mat<f64>) -> Vec<f64> {
+        let n = z.nrows() as f64;
+        (0..z.ncols())
+            .map(|c| {
+                let m = (0..z.nrows()).map(|r| z[(r, c)]).sum::<f64>() / n;
+                (0..z.nrows()).for_each(|r| z[(r, c)] -= m);
+                m
+            })
+            .collect()
+    }
+
+    #[test]
+    fn gp_closed_form_equals_brute_force_refits_of_the_weights() {
+        let tmp = tempfile::tempdir().unwrap();
+        let n = 7;
+        let (_, z) = small_store(
+            tmp.path(),
+            n,
+            Dims::new(4, 4, 8).unwrap(),
+            TransformKind::Log,
+        );
+        let mut rng = SplitMix64::new(3);
+        let latent = Mat::<f64>::from_fn(n, 2, |_, _| rng.range(-1.0, 1.0));
+        let scale = z.as_ref().norm_max();
+        for noise in [1e-4, 1e-2] {
+            let kernel = Kernel {
+                length_scale: 0.8,
+                noise,
+            };
+            let k = kernel.matrix(latent.as_ref());
+            for refit_mean in [false, true] {
+                let pz = gp_predictor(&kernel, latent.as_ref(), refit_mean).unwrap() * &z;
+                for i in 0..n {
+                    // Drop row and column i, solve densely with the rest, predict z_i.
+                    let others: Vec<usize> = (0..n).filter(|&j| j != i).collect();
+                    let kk = Mat::from_fn(n - 1, n - 1, |a, b| k[(others[a], others[b])]);
+                    let ki = Mat::from_fn(n - 1, 1, |a, _| k[(i, others[a])]);
+                    let mut zo = without(z.as_ref(), i);
+                    let mean = if refit_mean {
+                        recentre(&mut zo)
+                    } else {
+                        vec![0.0; z.ncols()]
+                    };
+                    let w = kk.llt(Side::Lower).unwrap().solve(&ki);
+                    let pred = w.transpose() * &zo;
+                    for c in 0..z.ncols() {
+                        let want = mean[c] + pred[(0, c)];
+                        assert!(
+                            (pz[(i, c)] - want).abs() <= 1e-9 * scale,
+                            "mu {noise} refit {refit_mean} material {i} value {c}: {} vs {want}",
+                            pz[(i, c)]
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// Top-`q` principal directions (`d x q`) of centred rows, from the
+    /// `d x d` covariance: the primal problem, independent of the Gram trick.
+    fn primal_directions(z: &Mat<f64>, q: usize) -> Mat<f64> {
+        let (_, v) = eigen_desc((z.transpose() * z).as_ref()).unwrap();
+        Mat::from_fn(z.ncols(), q, |r, c| v[(r, c)])
+    }
+
+    #[test]
+    fn pca_predictors_equal_dense_primal_pca() {
+        let tmp = tempfile::tempdir().unwrap();
+        let n = 8;
+        let (_, z) = small_store(
+            tmp.path(),
+            n,
+            Dims::new(4, 4, 8).unwrap(),
+            TransformKind::Raw,
+        );
+        let y = &z * z.transpose();
+        let scale = z.as_ref().norm_max();
+        for q in [1, 3] {
+            // In sample: projection on the top q directions of all materials.
+            let v = primal_directions(&z, q);
+            let want = &z * &v * v.transpose();
+            let got = pca_in_sample_predictor(y.as_ref(), q).unwrap() * &z;
+            assert!((&got - &want).norm_max() <= 1e-9 * scale);
+            let resid = (&z - &got).squared_norm_l2();
+            let disc = discarded(y.as_ref(), q).unwrap();
+            assert!(
+                (resid - disc).abs() <= 1e-9 * y.as_ref().norm_max(),
+                "{resid} vs {disc}"
+            );
+            // Held out: recentre the others, their directions, project.
+            let got = pca_predictor(y.as_ref(), q).unwrap() * &z;
+            for i in 0..n {
+                let mut zo = without(z.as_ref(), i);
+                let mean = recentre(&mut zo);
+                let v = primal_directions(&zo, q);
+                let zi = Mat::from_fn(1, z.ncols(), |_, c| z[(i, c)] - mean[c]);
+                let proj = &zi * &v * v.transpose();
+                for c in 0..z.ncols() {
+                    let want = mean[c] + proj[(0, c)];
+                    assert!(
+                        (got[(i, c)] - want).abs() <= 1e-8 * scale,
+                        "q {q} material {i} value {c}: {} vs {want}",
+                        got[(i, c)]
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn streamed_errors_equal_dense_ones_for_any_thread_count() {
+        let tmp = tempfile::tempdir().unwrap();
+        let n = 6;
+        let dims = Dims::new(8, 8, 16).unwrap();
+        for transform in [TransformKind::Raw, TransformKind::Log] {
+            let sub = tmp.path().join(transform.name());
+            std::fs::create_dir(&sub).unwrap();
+            let (store, z) = small_store(&sub, n, dims, transform);
+            let y = &z * z.transpose();
+            let mut rng = SplitMix64::new(9);
+            let latent = Mat::<f64>::from_fn(n, 2, |_, _| rng.range(-1.0, 1.0));
+            let preds = vec![
+                gp_predictor(&Kernel::default(), latent.as_ref(), true).unwrap(),
+                pca_predictor(y.as_ref(), 2).unwrap(),
+            ];
+            let run = |threads| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap()
+                    .install(|| evaluate(&store, &preds, &NoProgress).unwrap())
+            };
+            let ev = run(2);
+            assert_eq!(ev, run(1));
+            // Dense reference with the library's own transform and std's log.
+            let t = transform.build(dims);
+            let log = TransformKind::Log.build(dims);
+            let (cos, grazing) = cosines(dims);
+            let mean = store.mean();
+            let mut scored = 0;
+            for (m, p) in preds.iter().enumerate() {
+                let zh = p * &z;
+                let (mut et, mut ef, mut el) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+                for row in 0..store.rows() {
+                    let bin = row % dims.bins();
+                    let ok = store.unmeasured()[row] == 0 && !grazing[bin];
+                    scored += (m == 0 && ok) as usize;
+                    for i in 0..n {
+                        let (tt, tp) = (mean[row] + z[(i, row)], mean[row] + zh[(i, row)]);
+                        et[i] += (tp - tt).powi(2);
+                        if ok {
+                            let (ft, fp) = (t.inverse(bin, tt), t.inverse(bin, tp));
+                            ef[i] += (fp - ft).powi(2);
+                            let l = |f: f64| (f * cos[bin]).ln_1p();
+                            el[i] += (l(fp) - l(ft)).powi(2);
+                            assert!((log.forward(bin, Some(fp)) - l(fp)).abs() < 1e-12);
+                        }
+                    }
+                }
+                let e = &ev.errors[m];
+                for i in 0..n {
+                    for (got, want, what) in [
+                        (e.transformed[i], et[i], "transformed"),
+                        (e.raw[i], ef[i], "raw"),
+                        (e.log[i], el[i], "log"),
+                    ] {
+                        assert!(
+                            (got - want).abs() <= 1e-9 * want.abs().max(1e-12),
+                            "{transform:?} predictor {m} material {i} {what}: {got} vs {want}"
+                        );
+                    }
+                }
+            }
+            assert_eq!(ev.scored_rows, scored);
+            assert!(scored > 0 && scored < ev.rows);
+        }
+    }
+
+    #[test]
+    fn fast_log_matches_std() {
+        let mut rng = SplitMix64::new(1);
+        for k in 0..200_000 {
+            let y = match k % 3 {
+                0 => rng.range(0.0, 1.0),
+                1 => rng.range(0.0, 1e4),
+                _ => 10f64.powf(rng.range(-12.0, 8.0)),
+            };
+            let (got, want) = (ln_1p(y), y.ln_1p());
+            assert!(
+                (got - want).abs() <= 2e-15 * want.max(1.0),
+                "{y}: {got} vs {want}"
+            );
+        }
+        assert_eq!(ln_1p(0.0), 0.0);
+    }
+}
