@@ -11,7 +11,7 @@ use brdf_merl::Dims;
 
 use crate::error::Error;
 use crate::info::{self, Summary};
-use crate::{fit, map, reconstruct, synth};
+use crate::{fit, map, reconstruct, report, synth};
 
 /// Where the demo works and how big it is.
 #[derive(Debug, Clone)]
@@ -58,6 +58,7 @@ const STEPS: &[Step] = &[
         "Reconstruct a new material between the first two",
         reconstruct_between,
     ),
+    ("Measure what accuracy costs (a quick report)", write_report),
 ];
 
 /// Run every step, announcing each, then say where everything went.
@@ -100,6 +101,11 @@ pub fn run(options: &Options) -> Result<ExitCode, Error> {
             "  {RECONSTRUCTED:<22}a new material halfway between {a} and {b}; open it in BRDF Explorer"
         )?;
     }
+    writeln!(
+        out,
+        "  {:<22}what accuracy costs on this database: report.md, CSV tables, PNG plots",
+        format!("{REPORT}/")
+    )?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -109,6 +115,7 @@ const MAP_PNG: &str = "map.png";
 const MAP_JSON: &str = "map.json";
 const MAP_EXR: &str = "map.exr";
 const RECONSTRUCTED: &str = "reconstructed.binary";
+const REPORT: &str = "report";
 
 /// Run `write` into a buffer and print it indented under the step's title.
 fn indented(write: impl FnOnce(&mut Vec<u8>) -> Result<(), Error>) -> Result<(), Error> {
@@ -200,5 +207,26 @@ fn reconstruct_between(state: &mut State) -> Result<(), Error> {
     let out = state.options.dir.join(RECONSTRUCTED);
     indented(|report| reconstruct::write(model, &x, &out, report))?;
     state.between = Some((model.names()[0].clone(), model.names()[1].clone()));
+    Ok(())
+}
+
+/// A quick report on the demo's database (leave-one-out errors for q = 1..3,
+/// optimisers, map accuracy, store precision).
+fn write_report(state: &mut State) -> Result<(), Error> {
+    let options = report::Options {
+        dir: merl_dir(state.options),
+        out: state.options.dir.join(REPORT),
+        q_max: report::QUICK_Q_MAX,
+        quick: true,
+        optimizer: OptimizerKind::Lbfgs,
+    };
+    let mut sink = Vec::new();
+    let summary = report::write(&options, &mut sink)?;
+    writeln!(
+        io::stdout(),
+        "      wrote {} in {}",
+        summary.report.display(),
+        fit::secs(summary.total)
+    )?;
     Ok(())
 }

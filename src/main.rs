@@ -16,6 +16,7 @@ mod locate;
 mod map;
 mod progress;
 mod reconstruct;
+mod report;
 mod synth;
 
 use std::path::PathBuf;
@@ -40,7 +41,8 @@ const EXAMPLES: &str = "Examples:
                                                      a new material from a point of the map
   brdf-atlas eval atlas.model --at 0.3,-0.5 --wi 30,0 --wo 30,180
                                                      its reflectance for one pair of directions
-  brdf-atlas locate atlas.model other.binary         where another material lands";
+  brdf-atlas locate atlas.model other.binary         where another material lands
+  brdf-atlas report materials/ -o report/            measure what accuracy costs in time";
 
 /// Explore the space of measured BRDFs.
 ///
@@ -241,6 +243,35 @@ enum Command {
         #[arg(required = true, value_name = "FILE")]
         files: Vec<PathBuf>,
     },
+    /// Measure what accuracy costs in time and write a report with tables and plots.
+    ///
+    /// On a directory of MERL files: the leave-one-out reconstruction error
+    /// of the GPLVM (closed form, no refit) for q = 1..Q and both transforms,
+    /// beside PCA with as many components; Hooke-Jeeves vs L-BFGS and
+    /// Hooke-Jeeves' minimum step (cost reached vs time); the albedo map's
+    /// error and time vs quadrature samples and its time vs size; f32 vs f64
+    /// stores. Writes REPORT_DIR/report.md, CSV files and PNG plots. Needs
+    /// disk for the stores it builds (about 4 times the MERL files' size in
+    /// f32) in a staging directory beside REPORT_DIR, removed at the end;
+    /// REPORT_DIR appears (or replaces an earlier report) only when complete.
+    Report {
+        /// Directory of MERL `.binary` files.
+        #[arg(value_name = "MERL_DIR")]
+        dir: PathBuf,
+        /// Report directory to write.
+        #[arg(short = 'o', long = "output", value_name = "REPORT_DIR")]
+        out: PathBuf,
+        /// Largest latent dimension of the leave-one-out sweep [default: 8, 3 with --quick].
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16))]
+        q_max: Option<u32>,
+        /// Fewer settings (sample counts, map sizes, steps): a report in seconds on small data.
+        #[arg(long)]
+        quick: bool,
+        /// Optimiser of the fits for q = 1..Q (the other one fits q = 2 as well;
+        /// maps and the precision comparison use the Hooke-Jeeves fit, `fit`'s default).
+        #[arg(long, value_enum, default_value_t = OptimizerArg::Lbfgs)]
+        optimizer: OptimizerArg,
+    },
     /// Show brdf-atlas at work on its embedded synthetic database, no download needed.
     ///
     /// Synthesises materials at the full MERL resolution into DIR/merl/,
@@ -385,6 +416,26 @@ fn run(cli: Cli) -> Result<ExitCode, Error> {
             labels: !no_labels,
         }),
         Command::Locate { model, files } => locate::run(&model, &files),
+        Command::Report {
+            dir,
+            out,
+            q_max,
+            quick,
+            optimizer,
+        } => report::run(&report::Options {
+            dir,
+            out,
+            q_max: q_max.map_or(
+                if quick {
+                    report::QUICK_Q_MAX
+                } else {
+                    report::DEFAULT_Q_MAX
+                },
+                |q| q as usize,
+            ),
+            quick,
+            optimizer: optimizer.into(),
+        }),
         Command::Demo { dir, count } => demo::run(&demo::Options {
             dir,
             count: count as usize,

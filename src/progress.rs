@@ -76,6 +76,7 @@ fn phase_message(label: &str) -> &'static str {
         "gram" => "Gram",
         "optimise" => "optimising",
         "map" => "map rows",
+        "loo" => "leave-one-out",
         _ => "working",
     }
 }

@@ -276,7 +276,7 @@ fn constant_table_albedo_is_pi_times_the_value() {
 }
 
 #[test]
-fn demo_synthesises_summarises_fits_maps_and_reconstructs() {
+fn demo_synthesises_summarises_fits_maps_reconstructs_and_reports() {
     let dir = tempfile::tempdir().unwrap();
     let demo_dir = dir.path().join("demo");
     let out = brdf_atlas(["demo", "--count", "3", "--dir", demo_dir.to_str().unwrap()]);
@@ -303,8 +303,8 @@ fn demo_synthesises_summarises_fits_maps_and_reconstructs() {
         assert_eq!(albedo.len(), 3, "{row}");
         assert!(albedo.iter().all(|a| *a > 0.0 && *a < 1.5), "{row}");
     }
-    for step in 1..=5 {
-        assert!(stdout.contains(&format!("[{step}/5]")), "{stdout}");
+    for step in 1..=6 {
+        assert!(stdout.contains(&format!("[{step}/6]")), "{stdout}");
     }
     // Everything it made is there and said to be there.
     for made in [
@@ -314,10 +314,12 @@ fn demo_synthesises_summarises_fits_maps_and_reconstructs() {
         "map.json",
         "map.exr",
         "reconstructed.binary",
+        "report/report.md",
     ] {
         assert!(demo_dir.join(made).is_file(), "{made}");
         assert!(stdout.contains(made), "{made} in {stdout}");
     }
+    assert!(demo_dir.join("report/loo.png").is_file());
     assert_eq!(
         std::fs::metadata(demo_dir.join("reconstructed.binary"))
             .unwrap()

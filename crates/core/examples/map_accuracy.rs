@@ -4,6 +4,7 @@
 //! `cargo run --release -p brdf-atlas-core --example map_accuracy -- MODEL`.
 
 use brdf_atlas_core::map::View;
+use brdf_atlas_core::measure::{map_error, reference_albedo};
 use brdf_atlas_core::{Model, NoProgress};
 use brdf_merl::Quadrature;
 
@@ -16,28 +17,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let pixels: Vec<(usize, usize)> = (0..4)
         .flat_map(|a| (0..4).map(move |b| (2 + 4 * a, 2 + 4 * b)))
         .collect();
-    let reference: Vec<[f64; 3]> = pixels
+    let reference = pixels
         .iter()
         .map(|&(px, py)| {
-            let b = model
-                .at(&view.pixel_to_latent(px as f64, py as f64, w, w))
-                .expect("point");
-            dense.integrate(|bin| [0, 1, 2].map(|c| b.value(c, bin).unwrap_or(0.0)))
+            let x = view.pixel_to_latent(px as f64, py as f64, w, w);
+            reference_albedo(&model, &x, &dense)
         })
-        .collect();
+        .collect::<Result<Vec<_>, _>>()?;
     println!("samples  bins  max_rel_err  mean_rel_err  time_256x256_s");
     for s in [16usize, 64, 256, 1024, 4096, 16384] {
         let map = model.albedo_map(w, w, view, Some(s), &NoProgress)?;
-        let (mut worst, mut sum) = (0.0f64, 0.0f64);
-        for (&(px, py), r) in pixels.iter().zip(&reference) {
-            let got = map.rgb[py * w + px];
-            let scale = r.iter().fold(1e-6f64, |a, v| a.max(v.abs()));
-            for c in 0..3 {
-                let e = (got[c] as f64 - r[c]).abs() / scale;
-                worst = worst.max(e);
-                sum += e / (3 * pixels.len()) as f64;
-            }
-        }
+        let (worst, sum) = map_error(&map, &pixels, &reference);
         let t = std::time::Instant::now();
         let big = model.albedo_map(256, 256, view, Some(s), &NoProgress)?;
         let bins = match big.method {

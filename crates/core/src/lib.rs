@@ -19,6 +19,7 @@ pub mod likelihood;
 pub mod locate;
 pub mod loo;
 pub mod map;
+pub mod measure;
 pub mod model;
 pub mod optim;
 pub mod pca;

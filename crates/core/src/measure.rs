@@ -1,0 +1,32 @@
+//! Reference values for accuracy measurements: the albedo of the material
+//! at a latent point integrated with a dense rule from its full
+//! reconstruction, and a map's error against such references.
+
+use brdf_merl::Quadrature;
+
+use crate::error::Result;
+use crate::map::AlbedoMap;
+use crate::model::Model;
+
+/// Albedo of the reconstruction at `x`, integrated with `rule` over every
+/// bin it names (unmeasured bins count as 0). Slow: one full reconstruction.
+pub fn reference_albedo(model: &Model, x: &[f64], rule: &Quadrature) -> Result<[f64; 3]> {
+    let blend = model.at(x)?;
+    Ok(rule.integrate(|bin| [0, 1, 2].map(|c| blend.value(c, bin).unwrap_or(0.0))))
+}
+
+/// Largest and mean error of `map` at `pixels` (`(px, py)`) against
+/// `reference` albedos, each relative to the reference's largest channel.
+pub fn map_error(map: &AlbedoMap, pixels: &[(usize, usize)], reference: &[[f64; 3]]) -> (f64, f64) {
+    let (mut worst, mut sum) = (0.0f64, 0.0f64);
+    for (&(px, py), r) in pixels.iter().zip(reference) {
+        let got = map.rgb[py * map.width + px];
+        let scale = r.iter().fold(1e-6f64, |a, v| a.max(v.abs()));
+        for c in 0..3 {
+            let e = (got[c] as f64 - r[c]).abs() / scale;
+            worst = worst.max(e);
+            sum += e;
+        }
+    }
+    (worst, sum / (3 * pixels.len().max(1)) as f64)
+}

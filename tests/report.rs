@@ -1,0 +1,144 @@
+//! End-to-end tests of `brdf-atlas report` on small synthetic databases:
+//! every file is written and readable, and a failing run leaves no partial
+//! report and keeps an earlier one.
+
+mod common;
+
+use std::path::Path;
+
+use common::{brdf_atlas, texts};
+
+fn leftovers(parent: &Path) -> Vec<String> {
+    std::fs::read_dir(parent)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains(".tmp-") || n.ends_with(".old"))
+        .collect()
+}
+
+#[test]
+fn report_writes_every_file_and_fails_atomically() {
+    let tmp = tempfile::tempdir().unwrap();
+    let merl = tmp.path().join("merl");
+    let made = brdf_atlas([
+        "synth".as_ref(),
+        "--count".as_ref(),
+        "6".as_ref(),
+        "--dims".as_ref(),
+        "12,12,24".as_ref(),
+        merl.as_os_str(),
+    ]);
+    assert!(made.status.success(), "{:?}", texts(&made));
+    let rep = tmp.path().join("rep");
+    let run = brdf_atlas([
+        "report".as_ref(),
+        merl.as_os_str(),
+        "-o".as_ref(),
+        rep.as_os_str(),
+        "--quick".as_ref(),
+    ]);
+    let (stdout, stderr) = texts(&run);
+    assert!(run.status.success(), "{stdout}\n{stderr}");
+    assert!(stdout.contains("report.md"), "{stdout}");
+    let md = std::fs::read_to_string(rep.join("report.md")).unwrap();
+    for want in [
+        "Machine:",
+        "6 materials",
+        "12x12x24",
+        "Leave-one-out",
+        "L-BFGS",
+        "f64",
+    ] {
+        assert!(md.contains(want), "report.md lacks {want:?}:\n{md}");
+    }
+    // Every image the report links is there and decodes.
+    for png in [
+        "loo.png",
+        "loo-reflectance.png",
+        "optimizers.png",
+        "map-samples.png",
+        "map-size.png",
+    ] {
+        assert!(md.contains(&format!("({png})")), "{png} not linked");
+        let file = std::fs::File::open(rep.join(png)).unwrap();
+        let reader = png::Decoder::new(std::io::BufReader::new(file))
+            .read_info()
+            .unwrap_or_else(|e| panic!("{png}: {e}"));
+        assert_eq!((reader.info().width, reader.info().height), (720, 440));
+    }
+    // CSV tables: q = 1..3, two transforms, GPLVM, its L-BFGS twin and PCA.
+    let loo = std::fs::read_to_string(rep.join("loo.csv")).unwrap();
+    assert_eq!(loo.lines().count(), 1 + 2 * (3 + 1 + 3), "{loo}");
+    for line in loo.lines().skip(1) {
+        let cols: Vec<&str> = line.split(',').collect();
+        for v in &cols[3..6] {
+            let v: f64 = v.parse().unwrap_or_else(|_| panic!("{line}"));
+            assert!(v.is_finite() && v >= 0.0, "{line}");
+        }
+    }
+    let per = std::fs::read_to_string(rep.join("loo-materials.csv")).unwrap();
+    assert_eq!(per.lines().count(), 1 + 2 * 7 * 6);
+    for csv in [
+        "fits.csv",
+        "stores.csv",
+        "precision.csv",
+        "map-samples.csv",
+        "map-size.csv",
+    ] {
+        let text = std::fs::read_to_string(rep.join(csv)).unwrap();
+        assert!(text.lines().count() >= 2, "{csv}: {text}");
+    }
+    // Nothing but the report: no stores, no staging directories.
+    let names: Vec<String> = std::fs::read_dir(&rep)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(
+        names.iter().all(|n| !n.ends_with(".store") && n != "work"),
+        "{names:?}"
+    );
+    assert!(leftovers(tmp.path()).is_empty());
+
+    // A failing run (a corrupt MERL file in the directory) names the file,
+    // exits 1, keeps the earlier report as it was and leaves nothing behind.
+    let before = std::fs::read(rep.join("report.md")).unwrap();
+    std::fs::write(merl.join("zz-broken.binary"), b"not a table").unwrap();
+    let fail = brdf_atlas([
+        "report".as_ref(),
+        merl.as_os_str(),
+        "-o".as_ref(),
+        rep.as_os_str(),
+        "--quick".as_ref(),
+    ]);
+    let (_, stderr) = texts(&fail);
+    assert_eq!(fail.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("zz-broken.binary"), "{stderr}");
+    assert_eq!(std::fs::read(rep.join("report.md")).unwrap(), before);
+    assert!(
+        leftovers(tmp.path()).is_empty(),
+        "{:?}",
+        leftovers(tmp.path())
+    );
+    // Into a new directory: none is created.
+    let fresh = tmp.path().join("fresh");
+    let fail = brdf_atlas([
+        "report".as_ref(),
+        merl.as_os_str(),
+        "-o".as_ref(),
+        fresh.as_os_str(),
+        "--quick".as_ref(),
+    ]);
+    assert_eq!(fail.status.code(), Some(1));
+    assert!(!fresh.exists());
+    assert!(leftovers(tmp.path()).is_empty());
+    // A directory that is not a report is never replaced.
+    let fail = brdf_atlas([
+        "report".as_ref(),
+        merl.as_os_str(),
+        "-o".as_ref(),
+        merl.as_os_str(),
+    ]);
+    let (_, stderr) = texts(&fail);
+    assert_eq!(fail.status.code(), Some(1));
+    assert!(stderr.contains("not a brdf-atlas report"), "{stderr}");
+}
