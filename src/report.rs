@@ -892,13 +892,13 @@ fn markdown(
          are wall times of single runs{}, \
          upper bounds rather than best cases. Files were read through the page cache.\n",
         cpu_model(),
+        std::thread::available_parallelism().map_or(0, |p| p.get()),
+        rayon::current_num_threads(),
         if plan.repeat {
             " (the median of three when a run takes under 0.7 s)"
         } else {
             ""
-        },
-        std::thread::available_parallelism().map_or(0, |p| p.get()),
-        rayon::current_num_threads()
+        }
     );
     let _ = writeln!(
         w,

@@ -242,6 +242,9 @@ pub fn ln_1p(y: f64) -> f64 {
     kf * std::f64::consts::LN_2 + 2.0 * s * p
 }
 
+/// One group's sums: transformed, reflectance and log squared errors, scored rows.
+type Partial = (Vec<f64>, Vec<f64>, Vec<f64>, usize);
+
 /// Apply every predictor to every row of `store` and sum the squared errors
 /// per material: one streaming pass, parallel over fixed groups of blocks
 /// folded in order (same bits for any thread count).
@@ -273,7 +276,7 @@ pub fn evaluate(
     let unmeasured = store.unmeasured();
     let mean = store.mean();
     progress.start("loo", rows as u64);
-    let partials: Vec<(Vec<f64>, Vec<f64>, Vec<f64>, usize)> = (0..groups)
+    let partials: Vec<Partial> = (0..groups)
         .into_par_iter()
         .map(|g| {
             let (mut et, mut ef, mut el) = (vec![0.0; mn], vec![0.0; mn], vec![0.0; mn]);
