@@ -111,6 +111,34 @@ typedef enum BrdfAtlasStatus {
 typedef struct BrdfAtlasModel BrdfAtlasModel;
 
 /**
+ * One segment of a contour line of an albedo map, in the map's pixel
+ * coordinates: pixel (px, py) covers [px, px + 1) x [py, py + 1), row 0 at
+ * the top, so a pixel's centre is at (px + 0.5, py + 0.5).
+ */
+typedef struct BrdfAtlasSegment {
+    /**
+     * First end, x.
+     */
+    float x0;
+    /**
+     * First end, y.
+     */
+    float y0;
+    /**
+     * Second end, x.
+     */
+    float x1;
+    /**
+     * Second end, y.
+     */
+    float y1;
+    /**
+     * Index of the segment's level in the `levels` array it was traced for.
+     */
+    size_t level;
+} BrdfAtlasSegment;
+
+/**
  * A window of the latent plane: x in [x0, x1], y in [y0, y1], y up.
  */
 typedef struct BrdfAtlasView {
@@ -183,6 +211,64 @@ typedef struct BrdfAtlasLocation {
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
+
+/**
+ * `count` luminance levels evenly spaced strictly inside the luminance
+ * range (Rec. 709 weights) of a `width` x `height` albedo map laid out as
+ * `brdf_atlas_model_albedo_map` writes it: level k (1-based) is
+ * lo + (hi - lo) k / (count + 1). A map of one flat luminance has no
+ * levels: `*written` is then 0.
+ *
+ * Ownership: `rgb` is borrowed (`width * height * 3` floats); `levels` is
+ * caller-owned, `len` floats (at least `count`), and `*written` (the
+ * number of levels, `count` or 0) are written on success only.
+ *
+ * Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (zero or too large size, a
+ * non-finite value in `rgb`), BUFFER_TOO_SMALL (len < count).
+ *
+ * # Safety
+ * `rgb` is NULL or valid for reading `width * height * 3` floats; `levels`
+ * is NULL or valid for writing `len` floats; `written` is NULL or valid
+ * for writing.
+ */
+enum BrdfAtlasStatus brdf_atlas_contour_levels(const float *rgb,
+                                               size_t width,
+                                               size_t height,
+                                               size_t count,
+                                               float *levels,
+                                               size_t len,
+                                               size_t *written);
+
+/**
+ * The luminance contour lines of a `width` x `height` albedo map (laid out
+ * as `brdf_atlas_model_albedo_map` writes it) at the `n_levels` luminance
+ * values `levels`, by marching squares between pixel centres (saddles
+ * decided by the cell's mean): the segments of every level, level by
+ * level, in the map's pixel coordinates (see `BrdfAtlasSegment`).
+ *
+ * Size query: with `buf` NULL and `len` 0, only `*count` (the number of
+ * segments) is written. Otherwise `buf` must hold `*count` segments.
+ *
+ * Ownership: `rgb` and `levels` are borrowed; `buf` is caller-owned, `len`
+ * segments, and `*count` are written on success only.
+ *
+ * Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (zero or too large size, a
+ * non-finite value in `rgb` or `levels`), BUFFER_TOO_SMALL (len < the
+ * segment count).
+ *
+ * # Safety
+ * `rgb` is NULL or valid for reading `width * height * 3` floats; `levels`
+ * is NULL or valid for reading `n_levels` floats; `buf` is NULL or valid
+ * for writing `len` segments; `count` is NULL or valid for writing.
+ */
+enum BrdfAtlasStatus brdf_atlas_contours(const float *rgb,
+                                         size_t width,
+                                         size_t height,
+                                         const float *levels,
+                                         size_t n_levels,
+                                         struct BrdfAtlasSegment *buf,
+                                         size_t len,
+                                         size_t *count);
 
 /**
  * Open the model file at `path` (its store, `path` + ".store", beside it)

@@ -1,7 +1,7 @@
 //! The C ABI of brdf-atlas: open a fitted model, reconstruct a material at
 //! any latent point (as a MERL table in memory or a file), evaluate it for
-//! direction pairs, read the blend weights and the albedo map, and locate a
-//! MERL file in the latent plane.
+//! direction pairs, read the blend weights and the albedo map (and trace its
+//! luminance contours), and locate a MERL file in the latent plane.
 //!
 //! The header `include/brdf_atlas.h` is generated from this crate by
 //! cbindgen (`tests/header.rs` checks it is current);
@@ -37,10 +37,12 @@
 #![warn(missing_docs)]
 
 mod check;
+pub mod contour;
 pub mod model;
 pub mod query;
 pub mod status;
 
+pub use contour::{BrdfAtlasSegment, brdf_atlas_contour_levels, brdf_atlas_contours};
 pub use model::{
     BrdfAtlasDims, BrdfAtlasModel, BrdfAtlasView, brdf_atlas_model_dims, brdf_atlas_model_free,
     brdf_atlas_model_latent_dim, brdf_atlas_model_latent_point, brdf_atlas_model_material_count,

@@ -1,0 +1,236 @@
+// Qt Test of the brdf-atlas map widget, driven like a user: hover a
+// reference point, zoom with the wheel, drag, click, press Validate, wait
+// for the reconstruction off the GUI thread, and check the table against
+// the C library called directly (bit for bit), then save it and compare
+// with the library's own writer byte for byte. Grabs the widget to a PNG.
+//
+// Environment: BRDF_ATLAS_TEST_MODEL (a 2-D model file, required),
+// BRDF_ATLAS_ARTEFACTS (directory for the screenshot; default ".").
+// Run with QT_QPA_PLATFORM=offscreen on a machine without a display.
+#include <QDir>
+#include <QFile>
+#include <QLabel>
+#include <QProgressBar>
+#include <QPushButton>
+#include <QSignalSpy>
+#include <QTemporaryDir>
+#include <QToolTip>
+#include <QtTest>
+
+#include <cmath>
+#include <cstring>
+
+#include "AtlasMapWidget.h"
+
+namespace {
+
+// The C library's own answer at (x, y), through a handle of its own.
+std::vector<double> referenceTable(const QString &model, double x, double y) {
+    BrdfAtlasModel *h = nullptr;
+    if (brdf_atlas_model_open(model.toUtf8().constData(), &h) != BRDF_ATLAS_STATUS_OK) {
+        qFatal("brdf_atlas_model_open: %s", brdf_atlas_last_error_message());
+    }
+    std::size_t len = 0;
+    brdf_atlas_model_table_len(h, &len);
+    std::vector<double> t(len);
+    std::size_t written = 0;
+    const BrdfAtlasStatus s = brdf_atlas_model_reconstruct(h, x, y, t.data(), t.size(), &written);
+    if (s != BRDF_ATLAS_STATUS_OK || written != len) {
+        qFatal("brdf_atlas_model_reconstruct: %s", brdf_atlas_last_error_message());
+    }
+    brdf_atlas_model_free(h);
+    return t;
+}
+
+QByteArray readAll(const QString &path) {
+    QFile f(path);
+    if (!f.open(QIODevice::ReadOnly)) qFatal("cannot read %s", qPrintable(path));
+    return f.readAll();
+}
+
+}  // namespace
+
+class TestAtlasMap : public QObject {
+    Q_OBJECT
+private:
+    QString modelPath_;
+    AtlasPanel *panel_ = nullptr;
+    AtlasMapView *view_ = nullptr;
+
+    // Wait for the map of the window shown now (layouts settled first).
+    void waitForMap() {
+        auto current = [this] {
+            const BrdfAtlasView w = view_->window(), m = view_->mapWindow();
+            return !view_->mapPending() && m.x0 == w.x0 && m.x1 == w.x1 && m.y0 == w.y0 &&
+                   m.y1 == w.y1;
+        };
+        QTest::qWait(50);
+        QTRY_VERIFY_WITH_TIMEOUT(current(), 60000);
+        QVERIFY(!view_->mapImage().isNull());
+    }
+
+private slots:
+    void initTestCase() {
+        modelPath_ = qEnvironmentVariable("BRDF_ATLAS_TEST_MODEL");
+        QVERIFY2(!modelPath_.isEmpty(), "set BRDF_ATLAS_TEST_MODEL to a 2-D brdf-atlas model file");
+        panel_ = new AtlasPanel;
+        view_ = panel_->mapView();
+        panel_->resize(360, 460);
+        panel_->show();
+        QVERIFY(QTest::qWaitForWindowExposed(panel_));
+        QSignalSpy opened(panel_, &AtlasPanel::modelOpened);
+        QSignalSpy failed(panel_, &AtlasPanel::failed);
+        panel_->openModel(modelPath_);
+        QVERIFY(panel_->busy());
+        QTRY_VERIFY_WITH_TIMEOUT(opened.count() + failed.count() > 0, 60000);
+        QVERIFY2(failed.isEmpty(), failed.isEmpty() ? "" : qPrintable(failed.first().first().toString()));
+        waitForMap();
+    }
+
+    void cleanupTestCase() { delete panel_; }
+
+    void referencePointsAreTheModelsMaterials() {
+        brdf_atlas::Model m(modelPath_.toStdString());
+        QCOMPARE(std::size_t(view_->materialPoints().size()), m.material_count());
+        for (int i = 0; i < view_->materialPoints().size(); ++i) {
+            const std::vector<double> p = m.latent_point(i);
+            QCOMPARE(view_->materialPoints()[i], QPointF(p[0], p[1]));
+            QCOMPARE(view_->materialNames()[i], QString::fromStdString(m.material_name(i)));
+        }
+        // The map has contours and is not one flat colour.
+        QVERIFY(view_->contours().size() > 10);
+        const QImage &img = view_->mapImage();
+        QSet<QRgb> colours;
+        for (int y = 0; y < img.height(); y += 7)
+            for (int x = 0; x < img.width(); x += 7) colours.insert(img.pixel(x, y));
+        QVERIFY2(colours.size() > 20, qPrintable(QString::number(colours.size())));
+    }
+
+    void hoverShowsTheName() {
+        const int i = view_->materialPoints().size() / 2;
+        const QPoint at = view_->latentToWidget(view_->materialPoints()[i]).toPoint();
+        QTest::mouseMove(view_, at);
+        QTRY_COMPARE(view_->hoveredMaterial(), i);
+        QCOMPARE(QToolTip::text(), view_->materialNames()[i]);
+        // Away from every point: no name.
+        QTest::mouseMove(view_, QPoint(1, 1));
+        QTRY_COMPARE(view_->hoveredMaterial(), -1);
+    }
+
+    void wheelZoomsAboutTheCursor() {
+        const QPointF at(view_->width() * 0.3, view_->height() * 0.6);
+        const QPointF before = view_->widgetToLatent(at);
+        const double scale = view_->scale();
+        QWheelEvent wheel(at, view_->mapToGlobal(at.toPoint()), QPoint(), QPoint(0, 2 * 120), Qt::NoButton,
+                          Qt::NoModifier, Qt::NoScrollPhase, false);
+        QApplication::sendEvent(view_, &wheel);
+        // Two notches in: 2^(-1/2) of the scale, the point under the cursor fixed.
+        QVERIFY(std::abs(view_->scale() / scale - std::pow(2.0, -0.5)) < 1e-12);
+        const QPointF after = view_->widgetToLatent(at);
+        QVERIFY(std::abs(after.x() - before.x()) < 1e-12 && std::abs(after.y() - before.y()) < 1e-12);
+        waitForMap();
+    }
+
+    void dragPans() {
+        const QPoint a(view_->width() / 2, view_->height() / 2), b = a + QPoint(40, -25);
+        const QPointF grabbed = view_->widgetToLatent(a);
+        const double scale = view_->scale();
+        QSignalSpy marker(view_, &AtlasMapView::markerChanged);
+        QTest::mousePress(view_, Qt::LeftButton, Qt::NoModifier, a);
+        for (int k = 1; k <= 4; ++k) {
+            const QPointF p = a + (b - a) * (k / 4.0);
+            QMouseEvent move(QEvent::MouseMove, p, view_->mapToGlobal(p.toPoint()), Qt::NoButton,
+                             Qt::LeftButton, Qt::NoModifier);
+            QApplication::sendEvent(view_, &move);
+        }
+        QTest::mouseRelease(view_, Qt::LeftButton, Qt::NoModifier, b);
+        // The latent point grabbed is now under the mouse; no zoom, no marker.
+        const QPointF now = view_->widgetToLatent(b);
+        QVERIFY(std::abs(now.x() - grabbed.x()) < 1e-12 && std::abs(now.y() - grabbed.y()) < 1e-12);
+        QCOMPARE(view_->scale(), scale);
+        QVERIFY(!view_->hasMarker());
+        QCOMPARE(marker.count(), 0);
+        waitForMap();
+    }
+
+    void clickSetsTheMarker() {
+        QVERIFY(!panel_->validateButton()->isEnabled());
+        // Between two materials: half-way from the first to the second.
+        const QPointF mid = (view_->materialPoints()[0] + view_->materialPoints()[1]) / 2;
+        const QPoint at = view_->latentToWidget(mid).toPoint();
+        QVERIFY(view_->rect().contains(at));
+        const QPointF expected = view_->widgetToLatent(at);
+        QSignalSpy marker(view_, &AtlasMapView::markerChanged);
+        QTest::mouseClick(view_, Qt::LeftButton, Qt::NoModifier, at);
+        QCOMPARE(marker.count(), 1);
+        QVERIFY(view_->hasMarker());
+        QCOMPARE(view_->marker(), expected);
+        QCOMPARE(marker.first()[0].toDouble(), expected.x());
+        const QString text = panel_->coordinatesLabel()->text();
+        QVERIFY2(text.contains(QString::number(expected.x(), 'f', 4)) &&
+                     text.contains(QString::number(expected.y(), 'f', 4)),
+                 qPrintable(text));
+        QVERIFY(panel_->validateButton()->isEnabled());
+    }
+
+    void validateReconstructsOffTheGuiThread() {
+        QSignalSpy done(panel_, &AtlasPanel::reconstructed);
+        QSignalSpy failed(panel_, &AtlasPanel::failed);
+        const QPointF m = view_->marker();
+        QTest::mouseClick(panel_->validateButton(), Qt::LeftButton);
+        // The click returned before the result: it is delivered by the event
+        // loop from a worker thread, and the busy indicator shows meanwhile.
+        QCOMPARE(done.count(), 0);
+        QVERIFY(panel_->busy());
+        QVERIFY(panel_->progressBar()->isVisibleTo(panel_));
+        QVERIFY(!panel_->validateButton()->isEnabled());
+        QTRY_VERIFY_WITH_TIMEOUT(done.count() + failed.count() > 0, 120000);
+        QVERIFY2(failed.isEmpty(), failed.isEmpty() ? "" : qPrintable(failed.first().first().toString()));
+        QVERIFY(!panel_->progressBar()->isVisibleTo(panel_));
+        const AtlasReconstruction r = done.first().first().value<AtlasReconstruction>();
+        QCOMPARE(r.x, m.x());
+        QCOMPARE(r.y, m.y());
+        QVERIFY(r.name.contains(view_->materialNames()[view_->nearestMaterial(m)]));
+        QVERIFY(r.table);
+        const std::vector<double> want = referenceTable(modelPath_, m.x(), m.y());
+        QCOMPARE(r.table->size(), want.size());
+        QCOMPARE(r.table->size(), 3 * r.dims.theta_h * r.dims.theta_d * r.dims.phi_d);
+        QVERIFY2(std::memcmp(r.table->data(), want.data(), want.size() * sizeof(double)) == 0,
+                 "the widget's table differs from brdf_atlas_model_reconstruct's");
+        // Not a trivial table: values vary and some are measured.
+        int positive = 0;
+        for (double v : want) positive += v > 0;
+        QVERIFY(positive > int(want.size() / 4));
+    }
+
+    void screenshot() {
+        const QString dir = qEnvironmentVariable("BRDF_ATLAS_ARTEFACTS", ".");
+        QDir().mkpath(dir);
+        const QString path = QDir(dir).filePath("atlas-widget.png");
+        waitForMap();  // the panel may have been resized by the texts since
+        const QImage shot = panel_->grab().toImage();
+        QVERIFY(shot.save(path));
+        QVERIFY(QImage(path).size() == shot.size());
+        qInfo("screenshot: %s", qPrintable(path));
+    }
+
+    void saveWritesWhatTheLibraryWrites() {
+        QTemporaryDir dir;
+        QVERIFY(dir.isValid());
+        const AtlasReconstruction &r = panel_->lastReconstruction();
+        const QString ours = dir.filePath("ours.binary"), theirs = dir.filePath("theirs.binary");
+        QVERIFY(panel_->saveTo(ours));
+        brdf_atlas::Model(modelPath_.toStdString()).save(r.x, r.y, theirs.toStdString());
+        const QByteArray a = readAll(ours), b = readAll(theirs);
+        QCOMPARE(a.size(), int(12 + r.table->size() * sizeof(double)));
+        QVERIFY2(a == b, "the widget's .binary differs from brdf_atlas_model_reconstruct_to_file's");
+        // A save into a missing directory fails with a message naming the file.
+        QSignalSpy failed(panel_, &AtlasPanel::failed);
+        QVERIFY(!panel_->saveTo(dir.filePath("missing/x.binary")));
+        QCOMPARE(failed.count(), 1);
+        QVERIFY(failed.first().first().toString().contains("missing/x.binary"));
+    }
+};
+
+QTEST_MAIN(TestAtlasMap)
+#include "tst_atlasmap.moc"

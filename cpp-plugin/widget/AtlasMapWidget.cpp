@@ -1,0 +1,607 @@
+// AtlasMapWidget.cpp: see AtlasMapWidget.h.
+#include "AtlasMapWidget.h"
+
+#include <QFileDialog>
+#include <QFileInfo>
+#include <QHBoxLayout>
+#include <QLabel>
+#include <QMouseEvent>
+#include <QPainter>
+#include <QPainterPath>
+#include <QProgressBar>
+#include <QPushButton>
+#include <QSaveFile>
+#include <QSettings>
+#include <QToolTip>
+#include <QVBoxLayout>
+#include <QWheelEvent>
+#include <QtConcurrent/QtConcurrentRun>
+#include <QtEndian>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <exception>
+
+namespace {
+
+// A drag starts once the mouse moved this far (pixels) with the button down.
+constexpr double kDragThreshold = 3.0;
+// Reference points are hit within this radius (pixels).
+constexpr double kHitRadius = 7.0;
+// One wheel notch (120 units) zooms by 2^(1/4).
+constexpr double kNotchZoom = 0.25;
+
+float srgb(float v) {
+    v = std::min(std::max(v, 0.0f), 1.0f);
+    return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
+}
+
+QString errorText(const std::exception &e) { return QString::fromUtf8(e.what()); }
+
+}  // namespace
+
+bool atlasWriteMerl(const AtlasReconstruction &r, const QString &path, QString *error) {
+    auto fail = [&](const QString &why) {
+        if (error) *error = QStringLiteral("%1: %2").arg(path, why);
+        return false;
+    };
+    if (!r.table) return fail(QStringLiteral("nothing reconstructed yet"));
+    const std::size_t bins = r.dims.theta_h * r.dims.theta_d * r.dims.phi_d;
+    if (r.table->size() != 3 * bins) return fail(QStringLiteral("table does not match its dims"));
+    QSaveFile f(path);
+    if (!f.open(QIODevice::WriteOnly)) return fail(f.errorString());
+    for (std::size_t d : {r.dims.theta_h, r.dims.theta_d, r.dims.phi_d}) {
+        const qint32 le = qToLittleEndian(static_cast<qint32>(d));
+        f.write(reinterpret_cast<const char *>(&le), sizeof le);
+    }
+    QByteArray chunk;
+    const std::size_t step = 1 << 16;
+    for (std::size_t i = 0; i < r.table->size(); i += step) {
+        const std::size_t n = std::min(step, r.table->size() - i);
+        chunk.resize(static_cast<int>(n * sizeof(double)));
+        for (std::size_t k = 0; k < n; ++k) {
+            qToLittleEndian((*r.table)[i + k], chunk.data() + k * sizeof(double));
+        }
+        if (f.write(chunk) != chunk.size()) return fail(f.errorString());
+    }
+    if (!f.commit()) return fail(f.errorString());
+    return true;
+}
+
+// ---------------------------------------------------------------------------
+// AtlasMapView
+
+AtlasMapView::AtlasMapView(QWidget *parent)
+    : QWidget(parent), mapWatcher_(new QFutureWatcher<MapResult>(this)) {
+    setMouseTracking(true);
+    setSizePolicy(QSizePolicy::Expanding, QSizePolicy::Expanding);
+    setCursor(Qt::CrossCursor);
+    debounce_.setSingleShot(true);
+    debounce_.setInterval(120);
+    connect(&debounce_, &QTimer::timeout, this, &AtlasMapView::startMap);
+    connect(mapWatcher_, &QFutureWatcher<MapResult>::finished, this, &AtlasMapView::mapFinished);
+}
+
+AtlasMapView::~AtlasMapView() {
+    // The job holds its own reference to the model; wait so it does not
+    // outlive the watcher it reports to.
+    mapWatcher_->waitForFinished();
+}
+
+void AtlasMapView::setModel(std::shared_ptr<const brdf_atlas::Model> model) {
+    model_ = std::move(model);
+    names_.clear();
+    points_.clear();
+    hasMarker_ = false;
+    hovered_ = -1;
+    mapImage_ = QImage();
+    contours_.clear();
+    mapError_.clear();
+    userMoved_ = false;
+    if (model_) {
+        try {
+            const std::size_t n = model_->material_count();
+            for (std::size_t i = 0; i < n; ++i) {
+                names_ << QString::fromStdString(model_->material_name(i));
+                const std::vector<double> p = model_->latent_point(i);
+                points_ << QPointF(p.at(0), p.at(1));
+            }
+            defaultWindow_ = model_->view();
+        } catch (const std::exception &e) {
+            mapError_ = errorText(e);
+        }
+    }
+    fitDefaultWindow();
+    ++generation_;
+    startMap();
+    update();
+}
+
+void AtlasMapView::fitDefaultWindow() {
+    const double w = std::max(1, width()), h = std::max(1, height());
+    centre_ = QPointF((defaultWindow_.x0 + defaultWindow_.x1) / 2,
+                      (defaultWindow_.y0 + defaultWindow_.y1) / 2);
+    scale_ = std::max((defaultWindow_.x1 - defaultWindow_.x0) / w,
+                      (defaultWindow_.y1 - defaultWindow_.y0) / h);
+}
+
+QPointF AtlasMapView::widgetToLatent(const QPointF &p) const {
+    return QPointF(centre_.x() + (p.x() - width() / 2.0) * scale_,
+                   centre_.y() - (p.y() - height() / 2.0) * scale_);
+}
+
+QPointF AtlasMapView::latentToWidget(const QPointF &x) const {
+    return QPointF(width() / 2.0 + (x.x() - centre_.x()) / scale_,
+                   height() / 2.0 - (x.y() - centre_.y()) / scale_);
+}
+
+BrdfAtlasView AtlasMapView::window() const {
+    const double hw = width() / 2.0 * scale_, hh = height() / 2.0 * scale_;
+    return BrdfAtlasView{centre_.x() - hw, centre_.x() + hw, centre_.y() - hh, centre_.y() + hh};
+}
+
+void AtlasMapView::setWindow(const QPointF &centre, double scale) {
+    if (!(scale > 0) || !std::isfinite(scale) || !std::isfinite(centre.x()) ||
+        !std::isfinite(centre.y())) {
+        return;
+    }
+    centre_ = centre;
+    scale_ = scale;
+    userMoved_ = true;
+    scheduleMap();
+    update();
+}
+
+void AtlasMapView::setMarker(const QPointF &latent) {
+    hasMarker_ = true;
+    marker_ = latent;
+    update();
+    emit markerChanged(latent.x(), latent.y());
+}
+
+int AtlasMapView::nearestMaterial(const QPointF &latent) const {
+    int best = -1;
+    double bestD = 0;
+    for (int i = 0; i < points_.size(); ++i) {
+        const QPointF d = points_[i] - latent;
+        const double dd = d.x() * d.x() + d.y() * d.y();
+        if (best < 0 || dd < bestD) {
+            best = i;
+            bestD = dd;
+        }
+    }
+    return best;
+}
+
+int AtlasMapView::materialAt(const QPointF &widgetPos) const {
+    int best = -1;
+    double bestD = kHitRadius * kHitRadius;
+    for (int i = 0; i < points_.size(); ++i) {
+        const QPointF d = latentToWidget(points_[i]) - widgetPos;
+        const double dd = d.x() * d.x() + d.y() * d.y();
+        if (dd <= bestD) {
+            best = i;
+            bestD = dd;
+        }
+    }
+    return best;
+}
+
+bool AtlasMapView::mapPending() const {
+    return model_ && (mapWatcher_->isRunning() || debounce_.isActive() ||
+                      (mapImage_.isNull() && mapError_.isEmpty()));
+}
+
+void AtlasMapView::scheduleMap() {
+    ++generation_;
+    debounce_.start();
+}
+
+void AtlasMapView::startMap() {
+    if (!model_ || mapWatcher_->isRunning()) {
+        return;  // mapFinished starts the next one
+    }
+    const double f = std::min(1.0, double(kMaxMapSide) / std::max(width(), height()));
+    const int mw = std::max(1, int(std::lround(width() * f)));
+    const int mh = std::max(1, int(std::lround(height() * f)));
+    mapWatcher_->setFuture(
+        QtConcurrent::run(&AtlasMapView::computeMap, model_, window(), mw, mh, generation_));
+}
+
+AtlasMapView::MapResult AtlasMapView::computeMap(std::shared_ptr<const brdf_atlas::Model> model,
+                                                 BrdfAtlasView win, int width, int height,
+                                                 quint64 generation) {
+    MapResult out;
+    out.window = win;
+    out.generation = generation;
+    try {
+        const std::vector<float> rgb = model->albedo_map(width, height, win);
+        QImage image(width, height, QImage::Format_RGB32);
+        for (int y = 0; y < height; ++y) {
+            QRgb *line = reinterpret_cast<QRgb *>(image.scanLine(y));
+            for (int x = 0; x < width; ++x) {
+                const float *c = &rgb[3 * (std::size_t(y) * width + x)];
+                line[x] = qRgb(int(std::lround(255 * srgb(c[0]))), int(std::lround(255 * srgb(c[1]))),
+                               int(std::lround(255 * srgb(c[2]))));
+            }
+        }
+        out.image = image;
+        // Contours by the library, in map pixels, then into latent coordinates.
+        std::vector<float> levels(kContourLevels);
+        std::size_t nLevels = 0;
+        brdf_atlas::check(brdf_atlas_contour_levels(rgb.data(), width, height, levels.size(),
+                                                    levels.data(), levels.size(), &nLevels));
+        std::size_t n = 0;
+        brdf_atlas::check(brdf_atlas_contours(rgb.data(), width, height, levels.data(), nLevels,
+                                              nullptr, 0, &n));
+        std::vector<BrdfAtlasSegment> segs(n);
+        if (n > 0) {
+            brdf_atlas::check(brdf_atlas_contours(rgb.data(), width, height, levels.data(),
+                                                  nLevels, segs.data(), segs.size(), &n));
+        }
+        const double sx = (win.x1 - win.x0) / width, sy = (win.y1 - win.y0) / height;
+        out.contours.reserve(int(n));
+        for (const BrdfAtlasSegment &s : segs) {
+            out.contours << QLineF(win.x0 + s.x0 * sx, win.y1 - s.y0 * sy, win.x0 + s.x1 * sx,
+                                   win.y1 - s.y1 * sy);
+        }
+    } catch (const std::exception &e) {
+        out.error = errorText(e);
+    }
+    return out;
+}
+
+void AtlasMapView::mapFinished() {
+    MapResult r = mapWatcher_->result();
+    // A result is kept even if the window moved meanwhile: it is drawn where
+    // it belongs until the next one arrives.
+    if (r.error.isEmpty()) {
+        mapImage_ = r.image;
+        mapWindow_ = r.window;
+        contours_ = r.contours;
+        mapError_.clear();
+    } else {
+        mapError_ = r.error;
+    }
+    update();
+    if (r.generation != generation_) {
+        if (!debounce_.isActive()) startMap();
+        return;
+    }
+    emit mapReady(mapError_);
+}
+
+void AtlasMapView::paintEvent(QPaintEvent *) {
+    QPainter p(this);
+    p.fillRect(rect(), QColor(40, 40, 44));
+    if (!model_) {
+        p.setPen(QColor(200, 200, 200));
+        p.drawText(rect(), Qt::AlignCenter | Qt::TextWordWrap,
+                   mapError_.isEmpty() ? QStringLiteral("No brdf-atlas model open") : mapError_);
+        return;
+    }
+    p.setRenderHint(QPainter::Antialiasing);
+    p.setRenderHint(QPainter::SmoothPixmapTransform);
+    if (!mapImage_.isNull()) {
+        const QRectF target(latentToWidget(QPointF(mapWindow_.x0, mapWindow_.y1)),
+                            latentToWidget(QPointF(mapWindow_.x1, mapWindow_.y0)));
+        p.drawImage(target, mapImage_);
+        // Contours: a dark line under a light one reads on any albedo.
+        QVector<QLineF> lines;
+        lines.reserve(contours_.size());
+        for (const QLineF &l : contours_) {
+            lines << QLineF(latentToWidget(l.p1()), latentToWidget(l.p2()));
+        }
+        p.setPen(QPen(QColor(0, 0, 0, 90), 2.0));
+        p.drawLines(lines);
+        p.setPen(QPen(QColor(255, 255, 255, 150), 1.0));
+        p.drawLines(lines);
+    }
+    // The box the materials live in.
+    p.setPen(QPen(QColor(255, 255, 255, 70), 1.0, Qt::DashLine));
+    p.setBrush(Qt::NoBrush);
+    p.drawRect(QRectF(latentToWidget(QPointF(-1, 1)), latentToWidget(QPointF(1, -1))));
+    // Reference points.
+    for (int i = 0; i < points_.size(); ++i) {
+        const QPointF c = latentToWidget(points_[i]);
+        const bool hot = i == hovered_;
+        p.setPen(QPen(Qt::black, 1.0));
+        p.setBrush(hot ? QColor(255, 220, 60) : QColor(255, 255, 255));
+        p.drawEllipse(c, hot ? 5.0 : 3.5, hot ? 5.0 : 3.5);
+        if (hot) {
+            p.setPen(Qt::white);
+            p.drawText(c + QPointF(8, -6), names_[i]);
+        }
+    }
+    // Marker.
+    if (hasMarker_) {
+        const QPointF c = latentToWidget(marker_);
+        p.setBrush(Qt::NoBrush);
+        p.setPen(QPen(Qt::black, 3.0));
+        p.drawEllipse(c, 7.0, 7.0);
+        p.setPen(QPen(QColor(230, 40, 40), 2.0));
+        p.drawEllipse(c, 7.0, 7.0);
+        p.drawLine(c + QPointF(-11, 0), c + QPointF(-4, 0));
+        p.drawLine(c + QPointF(4, 0), c + QPointF(11, 0));
+        p.drawLine(c + QPointF(0, -11), c + QPointF(0, -4));
+        p.drawLine(c + QPointF(0, 4), c + QPointF(0, 11));
+    }
+    if (!mapError_.isEmpty()) {
+        p.setPen(QColor(255, 120, 120));
+        p.drawText(rect().adjusted(6, 6, -6, -6), Qt::AlignBottom | Qt::TextWordWrap, mapError_);
+    } else if (mapImage_.isNull()) {
+        p.setPen(QColor(200, 200, 200));
+        p.drawText(rect(), Qt::AlignCenter, QStringLiteral("computing the map..."));
+    }
+}
+
+void AtlasMapView::resizeEvent(QResizeEvent *) {
+    if (!userMoved_) fitDefaultWindow();
+    if (model_) scheduleMap();
+}
+
+void AtlasMapView::wheelEvent(QWheelEvent *e) {
+    if (!model_) return;
+    const double notches = e->angleDelta().y() / 120.0;
+    if (notches == 0) return;
+    const QPointF at = e->position();
+    const QPointF fixed = widgetToLatent(at);
+    const double s = scale_ * std::pow(2.0, -kNotchZoom * notches);
+    // Keep the latent point under the cursor where it is.
+    const QPointF c(fixed.x() - (at.x() - width() / 2.0) * s, fixed.y() + (at.y() - height() / 2.0) * s);
+    setWindow(c, s);
+    e->accept();
+}
+
+void AtlasMapView::mousePressEvent(QMouseEvent *e) {
+    if (e->button() != Qt::LeftButton || !model_) return;
+    pressed_ = true;
+    dragging_ = false;
+    pressPos_ = e->localPos();
+    pressCentre_ = centre_;
+}
+
+void AtlasMapView::mouseMoveEvent(QMouseEvent *e) {
+    if (pressed_ && (e->buttons() & Qt::LeftButton)) {
+        const QPointF d = e->localPos() - pressPos_;
+        if (!dragging_ && std::hypot(d.x(), d.y()) > kDragThreshold) {
+            dragging_ = true;
+            setCursor(Qt::ClosedHandCursor);
+        }
+        if (dragging_) {
+            // The latent point under the mouse follows it.
+            setWindow(QPointF(pressCentre_.x() - d.x() * scale_, pressCentre_.y() + d.y() * scale_),
+                      scale_);
+        }
+        return;
+    }
+    const int i = materialAt(e->localPos());
+    if (i != hovered_) {
+        hovered_ = i;
+        update();
+        if (i >= 0) {
+            QToolTip::showText(e->globalPos(), names_[i], this);
+        } else {
+            QToolTip::hideText();
+        }
+    }
+}
+
+void AtlasMapView::mouseReleaseEvent(QMouseEvent *e) {
+    if (e->button() != Qt::LeftButton || !pressed_) return;
+    pressed_ = false;
+    if (dragging_) {
+        dragging_ = false;
+        setCursor(Qt::CrossCursor);
+        return;
+    }
+    setMarker(widgetToLatent(e->localPos()));
+}
+
+void AtlasMapView::leaveEvent(QEvent *) {
+    if (hovered_ >= 0) {
+        hovered_ = -1;
+        update();
+    }
+}
+
+// ---------------------------------------------------------------------------
+// AtlasPanel
+
+AtlasPanel::AtlasPanel(QWidget *parent)
+    : QWidget(parent),
+      view_(new AtlasMapView),
+      title_(new QLabel),
+      coords_(new QLabel),
+      validate_(new QPushButton(QStringLiteral("Validate"))),
+      save_(new QPushButton(QStringLiteral("Save .binary..."))),
+      progress_(new QProgressBar),
+      status_(new QLabel),
+      openWatcher_(new QFutureWatcher<Opened>(this)),
+      buildWatcher_(new QFutureWatcher<Built>(this)) {
+    qRegisterMetaType<AtlasReconstruction>();
+    setObjectName(QStringLiteral("brdfAtlasPanel"));
+    auto *layout = new QVBoxLayout(this);
+    layout->setContentsMargins(0, 0, 0, 0);
+    title_->setWordWrap(true);
+    // Long texts wrap rather than widen the panel (BRDF Explorer's is 300 px).
+    for (QLabel *l : {title_, coords_, status_}) l->setMinimumWidth(1);
+    title_->setText(QStringLiteral("brdf-atlas: no model open"));
+    layout->addWidget(title_);
+    layout->addWidget(view_, 1);
+    coords_->setTextInteractionFlags(Qt::TextSelectableByMouse);
+    coords_->setWordWrap(true);
+    layout->addWidget(coords_);
+    auto *buttons = new QHBoxLayout;
+    validate_->setToolTip(QStringLiteral("Reconstruct the material at the marker"));
+    save_->setToolTip(QStringLiteral("Save the last reconstructed material as a MERL .binary file"));
+    buttons->addWidget(validate_);
+    buttons->addWidget(save_);
+    layout->addLayout(buttons);
+    progress_->setRange(0, 0);  // busy indicator: the library reports no fraction
+    progress_->setTextVisible(true);
+    progress_->setVisible(false);
+    layout->addWidget(progress_);
+    status_->setWordWrap(true);
+    layout->addWidget(status_);
+    validate_->setEnabled(false);
+    save_->setEnabled(false);
+    updateCoordinates();
+
+    connect(view_, &AtlasMapView::markerChanged, this, [this] { updateCoordinates(); });
+    connect(validate_, &QPushButton::clicked, this, &AtlasPanel::validatePoint);
+    connect(save_, &QPushButton::clicked, this, &AtlasPanel::saveDialog);
+    connect(openWatcher_, &QFutureWatcher<Opened>::finished, this, [this] {
+        Opened o = openWatcher_->result();
+        setBusy(false, QString());
+        if (!o.error.isEmpty()) {
+            fail(o.error);
+            return;
+        }
+        modelPath_ = o.path;
+        view_->setModel(o.model);
+        QSettings(QStringLiteral("brdf-atlas"), QStringLiteral("plugin"))
+            .setValue(settingsKey(), o.path);
+        title_->setText(QStringLiteral("brdf-atlas: %1 (%2 materials)")
+                            .arg(QFileInfo(o.path).fileName())
+                            .arg(view_->materialNames().size()));
+        status_->setText(QStringLiteral("Click the map, then Validate."));
+        updateCoordinates();
+        emit modelOpened(o.path);
+    });
+    connect(buildWatcher_, &QFutureWatcher<Built>::finished, this, [this] {
+        Built b = buildWatcher_->result();
+        const double seconds = clock_.elapsed() / 1000.0;
+        setBusy(false, QString());
+        if (!b.error.isEmpty()) {
+            fail(b.error);
+            return;
+        }
+        last_ = b.r;
+        save_->setEnabled(true);
+        status_->setStyleSheet(QString());
+        status_->setText(QStringLiteral("%1: reconstructed in %2 s").arg(b.r.name).arg(seconds, 0, 'f', 2));
+        emit reconstructed(last_);
+    });
+}
+
+AtlasPanel::~AtlasPanel() {
+    openWatcher_->waitForFinished();
+    buildWatcher_->waitForFinished();
+}
+
+bool AtlasPanel::busy() const { return openWatcher_->isRunning() || buildWatcher_->isRunning(); }
+
+void AtlasPanel::setBusy(bool busy, const QString &what) {
+    progress_->setVisible(busy);
+    progress_->setFormat(what);
+    if (busy) {
+        status_->setStyleSheet(QString());
+        status_->setText(what);
+    }
+    updateCoordinates();
+}
+
+void AtlasPanel::fail(const QString &message) {
+    status_->setStyleSheet(QStringLiteral("color: #c03030"));
+    status_->setText(message);
+    emit failed(message);
+}
+
+void AtlasPanel::updateCoordinates() {
+    if (view_->hasMarker()) {
+        const QPointF m = view_->marker();
+        const int near = view_->nearestMaterial(m);
+        coords_->setText(QStringLiteral("x = %1, y = %2  (nearest: %3)")
+                             .arg(m.x(), 0, 'f', 4)
+                             .arg(m.y(), 0, 'f', 4)
+                             .arg(near >= 0 ? view_->materialNames()[near] : QStringLiteral("-")));
+    } else {
+        coords_->setText(view_->model() ? QStringLiteral("x = -, y = -  (click the map)")
+                                        : QStringLiteral("x = -, y = -"));
+    }
+    validate_->setEnabled(view_->model() && view_->hasMarker() && !buildWatcher_->isRunning());
+}
+
+QString AtlasPanel::nameFor(double x, double y) const {
+    const int near = view_->nearestMaterial(QPointF(x, y));
+    QString name = QStringLiteral("atlas(%1,%2)").arg(x, 0, 'f', 3).arg(y, 0, 'f', 3);
+    if (near >= 0) name += QStringLiteral(" ~") + view_->materialNames()[near];
+    return name;
+}
+
+void AtlasPanel::openModel(const QString &path) {
+    if (openWatcher_->isRunning()) return;
+    setBusy(true, QStringLiteral("opening %1 (checking its store)...").arg(QFileInfo(path).fileName()));
+    openWatcher_->setFuture(QtConcurrent::run([path]() -> Opened {
+        Opened o;
+        o.path = path;
+        try {
+            auto m = std::make_shared<const brdf_atlas::Model>(path.toStdString());
+            if (m->latent_dim() != 2) {
+                o.error = QStringLiteral("%1: the latent space is %2-D, the map needs a 2-D model")
+                              .arg(path)
+                              .arg(m->latent_dim());
+                return o;
+            }
+            o.model = std::move(m);
+        } catch (const std::exception &e) {
+            o.error = errorText(e);
+        }
+        return o;
+    }));
+}
+
+void AtlasPanel::chooseModel() {
+    const QString last =
+        QSettings(QStringLiteral("brdf-atlas"), QStringLiteral("plugin")).value(settingsKey()).toString();
+    const QString path = QFileDialog::getOpenFileName(
+        this, QStringLiteral("Open brdf-atlas model"), last,
+        QStringLiteral("brdf-atlas models (*.atlas *.model);;All files (*)"));
+    if (!path.isEmpty()) openModel(path);
+}
+
+void AtlasPanel::validatePoint() {
+    if (!view_->model() || !view_->hasMarker() || buildWatcher_->isRunning()) return;
+    const QPointF m = view_->marker();
+    AtlasReconstruction r;
+    r.x = m.x();
+    r.y = m.y();
+    r.name = nameFor(r.x, r.y);
+    r.modelPath = modelPath_;
+    std::shared_ptr<const brdf_atlas::Model> model = view_->model();
+    clock_.start();
+    setBusy(true, QStringLiteral("reconstructing at (%1, %2)...").arg(r.x, 0, 'f', 4).arg(r.y, 0, 'f', 4));
+    validate_->setEnabled(false);
+    buildWatcher_->setFuture(QtConcurrent::run([model, r]() mutable -> Built {
+        Built b;
+        try {
+            r.dims = model->dims();
+            r.table = std::make_shared<const std::vector<double>>(model->reconstruct(r.x, r.y));
+            b.r = r;
+        } catch (const std::exception &e) {
+            b.error = errorText(e);
+        }
+        return b;
+    }));
+}
+
+void AtlasPanel::saveDialog() {
+    if (!last_.table) return;
+    QString base = QStringLiteral("atlas_%1_%2.binary").arg(last_.x, 0, 'f', 3).arg(last_.y, 0, 'f', 3);
+    const QString path = QFileDialog::getSaveFileName(this, QStringLiteral("Save as MERL .binary"), base,
+                                                      QStringLiteral("MERL BRDF (*.binary)"));
+    if (!path.isEmpty()) saveTo(path);
+}
+
+bool AtlasPanel::saveTo(const QString &path) {
+    QString error;
+    if (!atlasWriteMerl(last_, path, &error)) {
+        fail(error);
+        return false;
+    }
+    status_->setStyleSheet(QString());
+    status_->setText(QStringLiteral("saved %1").arg(path));
+    return true;
+}

@@ -1,0 +1,242 @@
+// AtlasMapWidget.h: the brdf-atlas map for Qt 5 Widgets.
+//
+// AtlasMapView draws the albedo map of a brdf-atlas model (computed by the
+// C library for exactly the window shown, off the GUI thread), its
+// luminance contour lines, the model's materials as reference points (name
+// on hover) and a marker where the user clicked; the wheel zooms about the
+// cursor, dragging pans. AtlasPanel puts the view beside the latent
+// coordinates of the marker, a "Validate" button that reconstructs the
+// material there off the GUI thread (with a busy indicator) and a "Save
+// .binary..." button. The panel emits `reconstructed` with the whole MERL
+// table; what to do with it (a BRDF in BRDF Explorer's list, a file) is the
+// host's business.
+//
+// Depends on Qt5Widgets, Qt5Concurrent and the brdf-atlas C library
+// (brdf_atlas.h / brdf_atlas.hpp); nothing of BRDF Explorer.
+#ifndef BRDF_ATLAS_MAP_WIDGET_H
+#define BRDF_ATLAS_MAP_WIDGET_H
+
+#include <QElapsedTimer>
+#include <QFutureWatcher>
+#include <QImage>
+#include <QLineF>
+#include <QMetaType>
+#include <QPointF>
+#include <QString>
+#include <QStringList>
+#include <QTimer>
+#include <QVector>
+#include <QWidget>
+
+#include <memory>
+#include <vector>
+
+#include "brdf_atlas.hpp"
+
+class QLabel;
+class QProgressBar;
+class QPushButton;
+
+/// A material reconstructed at a latent point: what `AtlasPanel` hands out.
+struct AtlasReconstruction {
+    /// Latent point.
+    double x = 0, y = 0;
+    /// A display name: the coordinates and the nearest input material.
+    QString name;
+    /// The model file it came from.
+    QString modelPath;
+    /// Table dims.
+    brdf_atlas::Dims dims{};
+    /// The MERL table (3 * bins doubles, the data of a .binary file).
+    std::shared_ptr<const std::vector<double>> table;
+};
+Q_DECLARE_METATYPE(AtlasReconstruction)
+
+/// Write `r` as a MERL .binary file at `path`, atomically (QSaveFile). On
+/// failure returns false and sets `*error` to one line naming the file.
+bool atlasWriteMerl(const AtlasReconstruction &r, const QString &path, QString *error);
+
+/// The map canvas.
+class AtlasMapView : public QWidget {
+    Q_OBJECT
+public:
+    explicit AtlasMapView(QWidget *parent = nullptr);
+    ~AtlasMapView() override;
+
+    /// Show `model` (nullptr clears): its default window fitted to the widget.
+    void setModel(std::shared_ptr<const brdf_atlas::Model> model);
+    const std::shared_ptr<const brdf_atlas::Model> &model() const { return model_; }
+
+    /// Names and latent points of the model's materials.
+    const QStringList &materialNames() const { return names_; }
+    const QVector<QPointF> &materialPoints() const { return points_; }
+
+    /// Widget <-> latent coordinates (y up in latent space).
+    QPointF widgetToLatent(const QPointF &p) const;
+    QPointF latentToWidget(const QPointF &x) const;
+
+    /// Latent units per widget pixel, and the latent point at the widget's centre.
+    double scale() const { return scale_; }
+    QPointF centre() const { return centre_; }
+    /// Set the window: latent point at the centre and latent units per pixel.
+    void setWindow(const QPointF &centre, double scale);
+    /// The latent window the widget shows now.
+    BrdfAtlasView window() const;
+
+    /// The marker (where the user clicked); hasMarker() false before a click.
+    bool hasMarker() const { return hasMarker_; }
+    QPointF marker() const { return marker_; }
+    void setMarker(const QPointF &latent);
+
+    /// Index of the material under the mouse, -1 if none.
+    int hoveredMaterial() const { return hovered_; }
+    /// Index of the material nearest to a latent point (-1 without a model).
+    int nearestMaterial(const QPointF &latent) const;
+
+    /// The last map computed: image, its window, contour segments (latent
+    /// coordinates); mapPending() while a newer one is on its way.
+    const QImage &mapImage() const { return mapImage_; }
+    BrdfAtlasView mapWindow() const { return mapWindow_; }
+    const QVector<QLineF> &contours() const { return contours_; }
+    bool mapPending() const;
+    /// The largest side, in pixels, of a computed map (the image is scaled up beyond).
+    static constexpr int kMaxMapSide = 384;
+    /// Contour levels drawn.
+    static constexpr int kContourLevels = 12;
+
+    QSize sizeHint() const override { return QSize(280, 280); }
+    QSize minimumSizeHint() const override { return QSize(160, 160); }
+
+signals:
+    /// The user clicked at latent point (x, y).
+    void markerChanged(double x, double y);
+    /// A map for the current window is drawn (or failed: message non-empty).
+    void mapReady(const QString &error);
+
+protected:
+    void paintEvent(QPaintEvent *) override;
+    void resizeEvent(QResizeEvent *) override;
+    void wheelEvent(QWheelEvent *) override;
+    void mousePressEvent(QMouseEvent *) override;
+    void mouseMoveEvent(QMouseEvent *) override;
+    void mouseReleaseEvent(QMouseEvent *) override;
+    void leaveEvent(QEvent *) override;
+
+private:
+    struct MapResult {
+        QImage image;
+        BrdfAtlasView window{};
+        QVector<QLineF> contours;
+        QString error;
+        quint64 generation = 0;
+    };
+    static MapResult computeMap(std::shared_ptr<const brdf_atlas::Model> model,
+                                BrdfAtlasView window, int width, int height,
+                                quint64 generation);
+    void scheduleMap();
+    void startMap();
+    void mapFinished();
+    void fitDefaultWindow();
+    int materialAt(const QPointF &widgetPos) const;
+
+    std::shared_ptr<const brdf_atlas::Model> model_;
+    QStringList names_;
+    QVector<QPointF> points_;
+    BrdfAtlasView defaultWindow_{-1.1, 1.1, -1.1, 1.1};
+    QPointF centre_{0, 0};
+    double scale_ = 0.01;
+    bool userMoved_ = false;  // zoomed or panned: a resize keeps the window
+    bool hasMarker_ = false;
+    QPointF marker_;
+    int hovered_ = -1;
+
+    // Mouse: a press becomes a drag once it moves more than a few pixels.
+    bool pressed_ = false;
+    bool dragging_ = false;
+    QPointF pressPos_;
+    QPointF pressCentre_;
+
+    QImage mapImage_;
+    BrdfAtlasView mapWindow_{};
+    QVector<QLineF> contours_;
+    QString mapError_;
+    quint64 generation_ = 0;  // of the window wanted now
+    QTimer debounce_;
+    QFutureWatcher<MapResult> *mapWatcher_;
+};
+
+/// The map with coordinates, Validate and Save.
+class AtlasPanel : public QWidget {
+    Q_OBJECT
+public:
+    explicit AtlasPanel(QWidget *parent = nullptr);
+    ~AtlasPanel() override;
+
+    AtlasMapView *mapView() const { return view_; }
+    QPushButton *validateButton() const { return validate_; }
+    QPushButton *saveButton() const { return save_; }
+    QProgressBar *progressBar() const { return progress_; }
+    QLabel *coordinatesLabel() const { return coords_; }
+    QLabel *statusLabel() const { return status_; }
+
+    /// The model file shown ("" before one is open).
+    QString modelPath() const { return modelPath_; }
+    /// Whether a model open or a reconstruction is running.
+    bool busy() const;
+    /// The last reconstruction (table null before the first).
+    const AtlasReconstruction &lastReconstruction() const { return last_; }
+
+    /// The QSettings key of the last model opened (organisation and
+    /// application names are the host's).
+    static QString settingsKey() { return QStringLiteral("brdf-atlas/lastModel"); }
+
+public slots:
+    /// Open a model file off the GUI thread (checks the store); emits
+    /// modelOpened or failed.
+    void openModel(const QString &path);
+    /// Ask for a model file (starting at the last one) and open it.
+    void chooseModel();
+    /// Reconstruct the material at the marker off the GUI thread; emits
+    /// reconstructed or failed.
+    void validatePoint();
+    /// Ask for a file name and save the last reconstruction there.
+    void saveDialog();
+    /// Save the last reconstruction as a MERL .binary file at `path`.
+    bool saveTo(const QString &path);
+
+signals:
+    void modelOpened(const QString &path);
+    void reconstructed(const AtlasReconstruction &r);
+    void failed(const QString &message);
+
+private:
+    void updateCoordinates();
+    void setBusy(bool busy, const QString &what);
+    void fail(const QString &message);
+    QString nameFor(double x, double y) const;
+
+    AtlasMapView *view_;
+    QLabel *title_;
+    QLabel *coords_;
+    QPushButton *validate_;
+    QPushButton *save_;
+    QProgressBar *progress_;
+    QLabel *status_;
+    QString modelPath_;
+    AtlasReconstruction last_;
+    QElapsedTimer clock_;
+
+    struct Opened {
+        std::shared_ptr<const brdf_atlas::Model> model;
+        QString path;
+        QString error;
+    };
+    struct Built {
+        AtlasReconstruction r;
+        QString error;
+    };
+    QFutureWatcher<Opened> *openWatcher_;
+    QFutureWatcher<Built> *buildWatcher_;
+};
+
+#endif  // BRDF_ATLAS_MAP_WIDGET_H
