@@ -432,6 +432,8 @@ AtlasPanel::AtlasPanel(QWidget *parent)
     layout->addWidget(view_, 1);
     coords_->setTextInteractionFlags(Qt::TextSelectableByMouse);
     coords_->setWordWrap(true);
+    // Two lines from the start, so the buttons below do not move on a click.
+    coords_->setMinimumHeight(2 * coords_->fontMetrics().lineSpacing());
     layout->addWidget(coords_);
     auto *buttons = new QHBoxLayout;
     validate_->setToolTip(QStringLiteral("Reconstruct the material at the marker"));
@@ -462,7 +464,7 @@ AtlasPanel::AtlasPanel(QWidget *parent)
         modelPath_ = o.path;
         view_->setModel(o.model);
         QSettings(QStringLiteral("brdf-atlas"), QStringLiteral("plugin"))
-            .setValue(settingsKey(), o.path);
+            .setValue(settingsKey(), QFileInfo(o.path).absoluteFilePath());
         title_->setText(QStringLiteral("brdf-atlas: %1 (%2 materials)")
                             .arg(QFileInfo(o.path).fileName())
                             .arg(view_->materialNames().size()));
