@@ -75,6 +75,20 @@ fn atlas(c: &mut Criterion) {
     let bins = log.dims().bins();
     let count = 100_000;
     g.throughput(Throughput::Elements(count as u64));
+    // A fresh blend each time: every bin is computed (memory-bound).
+    g.bench_function("point_bins_log_first_touch", |b| {
+        b.iter(|| {
+            let blend = log.at(black_box(&x)).expect("point");
+            let mut s = 0.0;
+            for k in 0..count {
+                if let Some(v) = blend.rgb((k * 7919) % bins) {
+                    s += v[0];
+                }
+            }
+            s
+        })
+    });
+    // The same blend again and again: bins asked before are remembered.
     g.bench_function("point_bins_log", |b| {
         b.iter(|| {
             let mut s = 0.0;
