@@ -173,6 +173,27 @@ impl Model {
         (a, m)
     }
 
+    /// The model's mean material as reflectance per bin (channels averaged,
+    /// unmeasured bins 0): the shape the map's quadrature rule assumes
+    /// within each box of bins ([`Quadrature::with_samples_shaped`]).
+    pub fn shape(&self) -> Vec<f64> {
+        let store = self.store();
+        let bins = self.dims().bins();
+        let (mean, unmeasured) = (store.mean(), store.unmeasured());
+        let mut shape = vec![0.0f64; bins];
+        let mut value = vec![0.0f64; bins];
+        for c in 0..3 {
+            self.transform
+                .inverse_run(0, &mean[c * bins..(c + 1) * bins], &mut value);
+            for ((s, v), &u) in shape.iter_mut().zip(&value).zip(&unmeasured[c * bins..]) {
+                if u == 0 {
+                    *s += v / 3.0;
+                }
+            }
+        }
+        shape
+    }
+
     /// The albedo map of a `width x height` image of `view`. `samples`:
     /// `None` uses the linear shortcut (raw transform only; an error
     /// otherwise), `Some(s)` integrates each pixel with an `s`-point rule.
@@ -254,7 +275,7 @@ impl Model {
                 AlbedoMethod::Linear
             }
             Some(s) => {
-                let rule = Quadrature::with_samples(self.dims(), s.max(1));
+                let rule = Quadrature::with_samples_shaped(self.dims(), s.max(1), &self.shape());
                 let store = self.store();
                 let bins = store.dims().bins();
                 // The rows the rule reads (measured ones only), grouped by channel,

@@ -28,6 +28,11 @@ use rayon::prelude::*;
 use crate::angles::Dims;
 use crate::table::MerlTable;
 
+/// Relative numbers of boxes along theta_h, theta_d and phi_d in
+/// [`Quadrature::with_samples_shaped`] (product 1): highlights vary fastest
+/// along theta_h, measured BRDFs slowest along phi_d.
+const SHAPED_SPLIT: [f64; 3] = [4.0, 1.0, 0.25];
+
 /// A quadrature rule for the albedo integral on a MERL grid.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Quadrature {
@@ -89,7 +94,8 @@ impl Quadrature {
         Quadrature::compact(dims, dense)
     }
 
-    /// A cheaper rule with about `samples` points: a stratified midpoint grid
+    /// A cheaper rule with about `samples` points, blind to the data (see
+    /// [`Quadrature::with_samples_shaped`] for the one maps use): a stratified midpoint grid
     /// over the whole domain (`n x n x 2n` cells, `phi_d` twice as fine),
     /// each sample looking up the bin it falls in. Fewer samples, fewer bins
     /// to evaluate, larger error: the accuracy/time trade of the albedo map.
@@ -119,6 +125,69 @@ impl Quadrature {
             }
         }
         Quadrature::compact(dims, dense)
+    }
+
+    /// A rule with about `samples` points for tables shaped like `shape`
+    /// (one positive value per bin, e.g. the mean of the materials a table
+    /// is blended from), for integrands far from constant over a box of
+    /// bins (a highlight spans a few bins). The bin grid is cut into about
+    /// `samples` boxes of whole bins (boxes align with bins: no aliasing);
+    /// in each box the table is assumed proportional to `shape`, so one bin
+    /// `b` stands for the box with weight `sum_box(w shape) / shape(b)`:
+    /// exact when the table is a multiple of `shape` on every box, and the
+    /// dense rule at one bin a box. `b` is the box's bin nearest the
+    /// centroid of `w shape`.
+    pub fn with_samples_shaped(dims: Dims, samples: usize, shape: &[f64]) -> Quadrature {
+        let dense = Quadrature::dense(dims, 2);
+        if samples >= dims.bins() || shape.len() != dims.bins() {
+            return dense;
+        }
+        let mut mass = vec![0.0f64; dims.bins()];
+        for (&b, &w) in dense.bins.iter().zip(&dense.weights) {
+            let f = shape[b as usize];
+            mass[b as usize] = if f.is_finite() && f > 0.0 { w * f } else { 0.0 };
+        }
+        let side = (dims.bins() as f64 / samples.max(1) as f64).cbrt();
+        let cuts = |n: usize, more: f64| -> Vec<usize> {
+            let boxes = ((n as f64 * more / side).round() as usize).clamp(1, n);
+            (0..=boxes).map(|j| j * n / boxes).collect()
+        };
+        let (ch, cd, cp) = (
+            cuts(dims.theta_h, SHAPED_SPLIT[0]),
+            cuts(dims.theta_d, SHAPED_SPLIT[1]),
+            cuts(dims.phi_d, SHAPED_SPLIT[2]),
+        );
+        let mut rule = vec![0.0f64; dims.bins()];
+        for h in ch.windows(2) {
+            for d in cd.windows(2) {
+                for p in cp.windows(2) {
+                    let (mut total, mut centroid, mut heaviest) = (0.0, [0.0f64; 3], (0.0, 0));
+                    for ih in h[0]..h[1] {
+                        for id in d[0]..d[1] {
+                            for ip in p[0]..p[1] {
+                                let bin = dims.bin(ih, id, ip);
+                                let m = mass[bin];
+                                total += m;
+                                for (c, i) in centroid.iter_mut().zip([ih, id, ip]) {
+                                    *c += m * i as f64;
+                                }
+                                if m > heaviest.0 {
+                                    heaviest = (m, bin);
+                                }
+                            }
+                        }
+                    }
+                    if total <= 0.0 {
+                        continue;
+                    }
+                    let [ih, id, ip] = centroid.map(|c| (c / total).round() as usize);
+                    let at = dims.bin(ih, id, ip);
+                    let at = if mass[at] > 0.0 { at } else { heaviest.1 };
+                    rule[at] += total / shape[at];
+                }
+            }
+        }
+        Quadrature::compact(dims, rule)
     }
 
     fn compact(dims: Dims, dense: Vec<f64>) -> Quadrature {
@@ -245,6 +314,37 @@ mod tests {
             last = err;
         }
         assert!(last < 2e-3, "{last}");
+    }
+
+    #[test]
+    fn shaped_rules_are_exact_for_the_shape_and_converge_otherwise() {
+        let dims = Dims::MERL;
+        let dense = Quadrature::dense(dims, 2);
+        let materials = crate::synth::database(4, 5);
+        let glossy = materials[1].brdf.table(dims);
+        // The shape: the glossy material's mean over channels (0 where unmeasured).
+        let shape: Vec<f64> = (0..dims.bins())
+            .map(|b| glossy.rgb_or_zero(b).iter().sum::<f64>() / 3.0)
+            .collect();
+        let proportional =
+            MerlTable::from_fn(dims, |b| Some([0.5, 1.0, 2.0].map(|k| k * shape[b])));
+        let other = materials[0].brdf.table(dims);
+        for (table, exact) in [(&proportional, true), (&other, false)] {
+            let want = dense.albedo(table);
+            let mut errors = Vec::new();
+            for s in [64, 1024, 65_536] {
+                let got = Quadrature::with_samples_shaped(dims, s, &shape).albedo(table);
+                errors.push((0..3).fold(0.0f64, |e, c| e.max((got[c] - want[c]).abs() / want[c])));
+            }
+            if exact {
+                assert!(errors.iter().all(|e| *e < 1e-12), "{errors:?}");
+            } else {
+                assert!(
+                    errors.windows(2).all(|e| e[1] < e[0]) && errors[2] < 1e-2,
+                    "{errors:?}"
+                );
+            }
+        }
     }
 
     #[test]
