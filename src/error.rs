@@ -33,6 +33,14 @@ pub enum Error {
         /// The directory.
         path: PathBuf,
     },
+    /// Putting a written output file in place failed.
+    #[error("{}: {source}", path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// What the OS said.
+        source: std::io::Error,
+    },
     /// Creating an output directory failed.
     #[error("{}: cannot create directory: {source}", path.display())]
     CreateDir {
@@ -44,6 +52,12 @@ pub enum Error {
     /// Writing the report to stdout failed.
     #[error("cannot write to stdout: {0}")]
     Stdout(#[from] std::io::Error),
+}
+
+impl From<(PathBuf, std::io::Error)> for Error {
+    fn from((path, source): (PathBuf, std::io::Error)) -> Self {
+        Error::Write { path, source }
+    }
 }
 
 impl Error {

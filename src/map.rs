@@ -10,6 +10,7 @@ use std::time::Instant;
 use brdf_atlas_core::Model;
 use brdf_atlas_core::map::{AlbedoMethod, DEFAULT_SAMPLES, View};
 use brdf_atlas_core::render::{self, Picture};
+use brdf_merl::atomic::commit_all;
 
 use crate::error::Error;
 use crate::fit::secs;
@@ -95,12 +96,14 @@ pub fn draw(model: &Model, options: &Options, report: &mut impl Write) -> Result
         ),
     };
     let picture = Picture::new(model, map, options.contours);
-    render::write_png(&options.png, &picture, options.labels)?;
-    if let Some(exr) = &options.exr {
-        render::write_exr(exr, &picture.map)?;
-    }
     let sidecar = picture.sidecar(model.path());
-    render::write_sidecar(&json, &sidecar)?;
+    // Every output is complete on disk before any replaces an old one.
+    let mut staged = vec![render::stage_png(&options.png, &picture, options.labels)?];
+    if let Some(exr) = &options.exr {
+        staged.push(render::stage_exr(exr, &picture.map)?);
+    }
+    staged.push(render::stage_sidecar(&json, &sidecar)?);
+    commit_all(staged)?;
     writeln!(
         report,
         "map {}x{} of {} over x {}..{}, y {}..{}: {method}, {}",

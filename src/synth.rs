@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use brdf_merl::Dims;
+use brdf_merl::atomic::{PendingFile, commit_all};
 use brdf_merl::synth::database;
 use brdf_merl::table::HEADER_BYTES;
 use rayon::prelude::*;
@@ -26,8 +27,9 @@ pub struct Options {
 }
 
 /// Tabulate and write every material of the database; returns the paths
-/// written, in database order. Writes are atomic, so an interrupted run
-/// leaves whole files only.
+/// written, in database order. Every file is written under a temporary name
+/// first and all take their places only once all are written, so a failed
+/// or interrupted run replaces no file and leaves no partial one.
 pub fn write_database(options: &Options) -> Result<Vec<PathBuf>, Error> {
     let dir = &options.out_dir;
     std::fs::create_dir_all(dir).map_err(|source| Error::CreateDir {
@@ -36,17 +38,20 @@ pub fn write_database(options: &Options) -> Result<Vec<PathBuf>, Error> {
     })?;
     let materials = database(options.count, options.seed);
     let pb = progress::bar(materials.len(), "synthesising");
-    let paths = materials
+    let staged = materials
         .par_iter()
         .map(|m| {
             let path = dir.join(format!("{}.binary", m.name));
-            m.brdf.table(options.dims).write(&path)?;
+            let staged = m.brdf.table(options.dims).stage(&path)?;
             pb.inc(1);
-            Ok(path)
+            Ok(staged)
         })
-        .collect::<Result<Vec<PathBuf>, Error>>();
+        .collect::<Result<Vec<PendingFile>, Error>>();
     pb.finish_and_clear();
-    paths
+    let staged = staged?;
+    let paths = staged.iter().map(|f| f.target().to_path_buf()).collect();
+    commit_all(staged)?;
+    Ok(paths)
 }
 
 /// Run `synth`: write the files, then say what was written where.

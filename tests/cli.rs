@@ -6,19 +6,6 @@ use std::path::{Path, PathBuf};
 
 use common::{binaries, brdf_atlas, reported, texts};
 
-/// The 12-byte header of dims `a x b x c`.
-fn header(a: i32, b: i32, c: i32) -> Vec<u8> {
-    [a, b, c].iter().flat_map(|d| d.to_le_bytes()).collect()
-}
-
-/// Bytes of a MERL file of dims `a x b x c` with every raw value `v`.
-fn merl_bytes(a: i32, b: i32, c: i32, v: f64) -> Vec<u8> {
-    let mut bytes = header(a, b, c);
-    let n = 3 * (a * b * c) as usize;
-    bytes.extend(std::iter::repeat_n(v.to_le_bytes(), n).flatten());
-    bytes
-}
-
 fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
     let path = dir.join(name);
     std::fs::write(&path, bytes).unwrap();
@@ -166,89 +153,7 @@ fn synth_into_a_file_fails_with_one_line() {
     );
 }
 
-/// Hostile inputs, each with a word its error must contain.
-fn hostile_files(dir: &Path) -> Vec<(PathBuf, &'static str)> {
-    let good = merl_bytes(4, 4, 8, 750.0);
-    let mut nan = good.clone();
-    let at = 12 + 8 * 200;
-    nan[at..at + 8].copy_from_slice(&f64::NAN.to_le_bytes());
-    let subdir = dir.join("a-directory.binary");
-    std::fs::create_dir(&subdir).unwrap();
-    vec![
-        (write(dir, "empty.binary", b""), "too short"),
-        (write(dir, "truncated.binary", &good[..good.len() - 100]), "bytes"),
-        (write(dir, "wrong-header.binary", &merl_bytes(90, 90, 180, 1.0)[..good.len()]), "header says 90x90x180"),
-        (write(dir, "negative-dims.binary", &header(-4, 4, 8)), "positive dims"),
-        (
-            write(dir, "lfs-pointer.binary", b"version https://git-lfs.github.com/spec/v1\noid sha256:4d7a214614ab2935c943f9e0ff69d22eadbb8f32b1258daaa5e2ca24d17e2393\nsize 34992012\n"),
-            "Git LFS pointer",
-        ),
-        (write(dir, "nan.binary", &nan), "NaN"),
-        (dir.join("does-not-exist.binary"), "No such file"),
-        (subdir, "is a directory"),
-    ]
-}
-
-#[test]
-fn each_hostile_file_fails_with_one_line_naming_it() {
-    let dir = tempfile::tempdir().unwrap();
-    for (path, want) in hostile_files(dir.path()) {
-        let out = brdf_atlas([Path::new("info"), &path]);
-        let (stdout, stderr) = texts(&out);
-        let name = path.file_name().unwrap().to_str().unwrap();
-        assert_eq!(out.status.code(), Some(1), "{name}: {stderr}");
-        assert_eq!(
-            stderr.lines().count(),
-            1,
-            "{name}: one line, got:\n{stderr}"
-        );
-        assert!(stderr.starts_with("error: "), "{name}: {stderr}");
-        assert!(
-            stderr.contains(name),
-            "{name}: error must name the file: {stderr}"
-        );
-        assert!(
-            stderr.contains(want),
-            "{name}: expected {want:?} in {stderr}"
-        );
-        assert!(
-            stdout.is_empty(),
-            "{name}: no report for a bad file: {stdout}"
-        );
-    }
-}
-
-#[test]
-fn bad_files_do_not_stop_the_good_ones() {
-    let dir = tempfile::tempdir().unwrap();
-    let hostile = hostile_files(dir.path());
-    let good = write(dir.path(), "good.binary", &merl_bytes(4, 4, 8, 750.0));
-    let mut args = vec![PathBuf::from("info"), hostile[0].0.clone(), good.clone()];
-    args.extend(hostile[1..].iter().map(|(p, _)| p.clone()));
-    let out = brdf_atlas(&args);
-    let (stdout, stderr) = texts(&out);
-    assert_eq!(out.status.code(), Some(1), "{stderr}");
-    let r = reported(&stdout, &good);
-    assert_eq!(r.dims, "4x4x8");
-    assert_eq!(r.invalid, [0; 3]);
-    let errors: Vec<&str> = stderr
-        .lines()
-        .filter(|l| l.starts_with("error: "))
-        .collect();
-    assert_eq!(errors.len(), hostile.len(), "{stderr}");
-    // In the order given, one per bad file.
-    for ((path, _), line) in hostile.iter().zip(&errors) {
-        assert!(
-            line.contains(path.file_name().unwrap().to_str().unwrap()),
-            "{line}"
-        );
-    }
-    assert_eq!(
-        stderr.lines().count(),
-        hostile.len() + 1,
-        "errors plus the dims warning:\n{stderr}"
-    );
-}
+// Broken MERL files through `info`, `locate` and `fit`: tests/hostile.rs.
 
 #[test]
 fn constant_table_albedo_is_pi_times_the_value() {

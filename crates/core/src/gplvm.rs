@@ -96,17 +96,8 @@ impl GplvmParams {
         if self.q == 0 || self.q > 16 {
             return bad(format!("q = {} must be between 1 and 16", self.q));
         }
-        if !(k.length_scale.is_finite() && k.length_scale > 0.0) {
-            return bad(format!(
-                "length scale {} must be positive and finite",
-                k.length_scale
-            ));
-        }
-        if !(k.noise.is_finite() && k.noise > 0.0) {
-            return bad(format!(
-                "noise {} must be positive and finite (it keeps K positive definite)",
-                k.noise
-            ));
+        if let Err(why) = k.check() {
+            return bad(why);
         }
         let hj = self.hooke_jeeves;
         if !(hj.min_step > 0.0 && hj.initial_step >= hj.min_step && hj.initial_step <= 2.0) {

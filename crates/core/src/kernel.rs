@@ -21,7 +21,33 @@ impl Default for Kernel {
     }
 }
 
+/// Smallest and largest length scale a kernel may have.
+pub const LENGTH_SCALE_RANGE: (f64, f64) = (1e-6, 1e6);
+/// Smallest and largest noise a kernel may have.
+pub const NOISE_RANGE: (f64, f64) = (1e-15, 1e6);
+
 impl Kernel {
+    /// Check the hyperparameters lie in [`LENGTH_SCALE_RANGE`] and
+    /// [`NOISE_RANGE`] (beyond them `K` is all ones or the identity to
+    /// working precision, or its entries are NaN); the error says which.
+    pub fn check(&self) -> Result<(), String> {
+        let (l0, l1) = LENGTH_SCALE_RANGE;
+        if !(l0..=l1).contains(&self.length_scale) {
+            return Err(format!(
+                "length scale {:?} must lie in [{l0:e}, {l1:e}]",
+                self.length_scale
+            ));
+        }
+        let (m0, m1) = NOISE_RANGE;
+        if !(m0..=m1).contains(&self.noise) {
+            return Err(format!(
+                "noise {:?} must lie in [{m0:e}, {m1:e}] (it keeps K positive definite)",
+                self.noise
+            ));
+        }
+        Ok(())
+    }
+
     /// `exp(-|a - b|^2 / (2 l^2))`, without the noise term.
     #[inline]
     pub fn eval(&self, a: &[f64], b: &[f64]) -> f64 {

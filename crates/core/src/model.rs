@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use brdf_merl::Dims;
-use brdf_merl::atomic::write_atomic;
+use brdf_merl::atomic::{stage, write_atomic};
 use faer::linalg::solvers::Solve;
 use faer::{Mat, Side};
 use serde::{Deserialize, Serialize};
@@ -168,14 +168,29 @@ pub fn store_path_for(model: &Path) -> PathBuf {
     PathBuf::from(s)
 }
 
-impl Model {
-    /// Open a model file and its store; check format, version, shapes, the
-    /// store's size and checksum, and factorise `K`.
-    pub fn open(path: impl AsRef<Path>) -> Result<Model> {
-        let path = path.as_ref().to_path_buf();
-        let text = std::fs::read(&path).map_err(|e| CoreError::io(&path, e))?;
-        let bad = |why: String| CoreError::bad_file(&path, why);
-        let value: serde_json::Value = serde_json::from_slice(&text)
+/// Largest latent coordinate a model file may hold: a fit keeps its points
+/// in `[-1, 1]^q`; far beyond, the kernel is 0 between any two points.
+pub const LATENT_LIMIT: f64 = 1e3;
+/// Largest latent dimension (as [`crate::GplvmParams::check`] allows).
+pub const MAX_Q: usize = 16;
+/// Largest number of materials of a model (as a store allows).
+pub const MAX_MATERIALS: usize = 1 << 20;
+
+impl ModelFile {
+    /// Parse and check the JSON of a model file without touching its store:
+    /// format, version, the shapes of every array and the sanity of every
+    /// number. `path` names the file in errors.
+    pub fn from_json(path: &Path, bytes: &[u8]) -> Result<ModelFile> {
+        let bad = |why: String| CoreError::bad_file(path, why);
+        if brdf_merl::table::is_lfs_pointer(bytes) {
+            return Err(bad(
+                "is a Git LFS pointer file, not a brdf-atlas model (run `git lfs pull` to fetch the real file)".into(),
+            ));
+        }
+        if bytes.iter().all(u8::is_ascii_whitespace) {
+            return Err(bad("empty file, expected a brdf-atlas model (JSON)".into()));
+        }
+        let value: serde_json::Value = serde_json::from_slice(bytes)
             .map_err(|e| bad(format!("not a brdf-atlas model (invalid JSON: {e})")))?;
         if value.get("format").and_then(|v| v.as_str()) != Some(FORMAT) {
             return Err(bad(format!(
@@ -186,7 +201,7 @@ impl Model {
             Some(v) if v == VERSION as u64 => {}
             Some(v) if v > VERSION as u64 => {
                 return Err(bad(format!(
-                    "model format version {v} is newer than this build reads ({VERSION}); upgrade brdf-atlas"
+                    "model format version {v} was written by a newer brdf-atlas (this build reads version {VERSION}); upgrade brdf-atlas"
                 )));
             }
             Some(v) => {
@@ -194,39 +209,94 @@ impl Model {
                     "model format version {v}, this build reads version {VERSION}"
                 )));
             }
-            None => return Err(bad("model has no version number".into())),
+            None => {
+                return Err(bad(
+                    "model has no version number (expected \"version\": 1)".into()
+                ));
+            }
         }
         let file: ModelFile =
             serde_json::from_value(value).map_err(|e| bad(format!("malformed model: {e}")))?;
-        let n = file.names.len();
-        let q = file.latent.first().map_or(0, |p| p.len());
-        if n == 0 || file.latent.len() != n {
-            return Err(bad(format!(
-                "{} names but {} latent points",
-                n,
-                file.latent.len()
-            )));
+        file.check().map_err(bad)?;
+        Ok(file)
+    }
+
+    /// Shapes and ranges of everything the JSON holds.
+    fn check(&self) -> std::result::Result<(), String> {
+        let n = self.names.len();
+        if n == 0 || n > MAX_MATERIALS {
+            return Err(format!("{n} materials, expected 1 to {MAX_MATERIALS}"));
         }
-        if q == 0
-            || file
-                .latent
-                .iter()
-                .any(|p| p.len() != q || p.iter().any(|v| !v.is_finite()))
-        {
-            return Err(bad(
-                "latent points must all have the same dimension and finite coordinates".into(),
+        if self.latent.len() != n {
+            return Err(format!("{n} names but {} latent points", self.latent.len()));
+        }
+        let q = self.latent[0].len();
+        if q == 0 || q > MAX_Q || q >= n {
+            return Err(format!(
+                "latent dimension q = {q}, expected 1 to {MAX_Q} and fewer than the {n} materials"
             ));
         }
-        let kernel = file.kernel;
-        if !(kernel.length_scale > 0.0
-            && kernel.length_scale.is_finite()
-            && kernel.noise > 0.0
-            && kernel.noise.is_finite())
-        {
-            return Err(bad(format!(
-                "kernel {kernel:?} needs positive finite length scale and noise"
-            )));
+        for (i, p) in self.latent.iter().enumerate() {
+            if p.len() != q {
+                return Err(format!(
+                    "latent point {i} has {} coordinates, the first has {q}",
+                    p.len()
+                ));
+            }
+            if let Some(v) = p.iter().find(|v| !(v.abs() <= LATENT_LIMIT)) {
+                return Err(format!(
+                    "latent point {i} ({}) has coordinate {v:?}, expected finite numbers within +-{LATENT_LIMIT} (a fit keeps them in [-1, 1])",
+                    self.names[i]
+                ));
+            }
         }
+        self.kernel
+            .check()
+            .map_err(|why| format!("kernel: {why}"))?;
+        let dims = Dims::new(self.dims[0], self.dims[1], self.dims[2])
+            .map_err(|e| format!("\"dims\": {e}"))?;
+        if self.d != dims.values() {
+            return Err(format!(
+                "d = {}, but dims {dims} have {} values",
+                self.d,
+                dims.values()
+            ));
+        }
+        if !(self.signal_variance.is_finite() && self.signal_variance > 0.0) {
+            return Err(format!(
+                "signal variance {:?} must be positive and finite",
+                self.signal_variance
+            ));
+        }
+        if self.gram.len() != n
+            || self
+                .gram
+                .iter()
+                .any(|r| r.len() != n || r.iter().any(|v| !v.is_finite()))
+        {
+            return Err(format!("the Gram matrix must be {n}x{n} finite numbers"));
+        }
+        let name = Path::new(&self.store.path);
+        if self.store.path.is_empty() || name.is_absolute() {
+            return Err(format!(
+                "store path {:?}: expected a path relative to the model file",
+                self.store.path
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl Model {
+    /// Open a model file and its store; check format, version, shapes, the
+    /// store's size and checksum, and factorise `K`.
+    pub fn open(path: impl AsRef<Path>) -> Result<Model> {
+        let path = path.as_ref().to_path_buf();
+        let text = std::fs::read(&path).map_err(|e| CoreError::io(&path, e))?;
+        let file = ModelFile::from_json(&path, &text)?;
+        let n = file.names.len();
+        let q = file.latent[0].len();
+        let kernel = file.kernel;
         let dir = path.parent().unwrap_or(Path::new("."));
         let store_path = dir.join(&file.store.path);
         let store = Store::open(&store_path)?;
@@ -258,16 +328,6 @@ impl Model {
                 "checksum {checksum} differs from {} recorded in {} (the store was changed)",
                 file.store.checksum,
                 path.display()
-            )));
-        }
-        if file.gram.len() != n
-            || file
-                .gram
-                .iter()
-                .any(|r| r.len() != n || r.iter().any(|v| !v.is_finite()))
-        {
-            return Err(bad(format!(
-                "the Gram matrix must be {n}x{n} finite numbers"
             )));
         }
         let gram = Mat::from_fn(n, n, |i, j| file.gram[i][j]);
@@ -420,7 +480,14 @@ pub fn fit_dir(
     if result.is_err() {
         let _ = std::fs::remove_file(&staging);
     }
-    result
+    // Name the store, not its temporary name, in errors.
+    result.map_err(|e| match e {
+        CoreError::Io { path, source } if path == staging => CoreError::Io {
+            path: store_path,
+            source,
+        },
+        e => e,
+    })
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -462,8 +529,19 @@ fn fit_staged(
         &gram,
         store_name,
     );
+    // Both files are complete on disk before either takes its place.
+    let json =
+        serde_json::to_vec_pretty(&file).map_err(|e| CoreError::bad_file(model, e.to_string()))?;
+    let staged = stage(model, |w| std::io::Write::write_all(w, &json))
+        .map_err(|e| CoreError::io(model, e))?;
+    if model.is_dir() {
+        return Err(CoreError::io(
+            model,
+            std::io::Error::new(std::io::ErrorKind::IsADirectory, "is a directory"),
+        ));
+    }
     std::fs::rename(staging, store_path).map_err(|e| CoreError::io(store_path, e))?;
-    Model::write_file(model, &file)?;
+    staged.commit(false).map_err(|e| CoreError::io(model, e))?;
     let save_time = t3.elapsed();
     Ok(FitReport {
         names: data.names.clone(),
@@ -564,7 +642,7 @@ mod tests {
         };
         check(
             &text.replace("\"version\": 1", "\"version\": 7"),
-            "newer than this build",
+            "written by a newer brdf-atlas",
         );
         check(&text[..text.len() / 2], "invalid JSON");
         check("{}", "not a brdf-atlas model");

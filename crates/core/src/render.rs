@@ -7,13 +7,13 @@
 use std::io::Cursor;
 use std::path::Path;
 
-use brdf_merl::atomic::write_atomic;
+use brdf_merl::atomic::{PendingFile, stage};
 use font8x8::UnicodeFonts;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result};
 use crate::map::{AlbedoMap, AlbedoMethod, Segment, View, contour_levels, contours, luminance};
-use crate::model::Model;
+use crate::model::{LATENT_LIMIT, MAX_MATERIALS, Model};
 
 /// An input material drawn on the map.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -100,7 +100,7 @@ impl Picture {
         });
         Sidecar {
             format: "brdf-atlas-map".into(),
-            version: 1,
+            version: SIDECAR_VERSION,
             width: self.map.width,
             height: self.map.height,
             view: self.map.view,
@@ -231,6 +231,30 @@ fn text(img: &mut [[f32; 3]], w: usize, h: usize, x: i64, y: i64, s: &str) {
 
 /// Write the picture as an 8-bit sRGB PNG (atomically).
 pub fn write_png(path: &Path, picture: &Picture, labels: bool) -> Result<()> {
+    commit(path, stage_png(path, picture, labels)?)
+}
+
+/// Write the linear albedo as a float RGB OpenEXR (atomically).
+pub fn write_exr(path: &Path, map: &AlbedoMap) -> Result<()> {
+    commit(path, stage_exr(path, map)?)
+}
+
+/// Write the sidecar as pretty JSON (atomically).
+pub fn write_sidecar(path: &Path, sidecar: &Sidecar) -> Result<()> {
+    commit(path, stage_sidecar(path, sidecar)?)
+}
+
+fn commit(path: &Path, staged: PendingFile) -> Result<()> {
+    staged.commit(false).map_err(|e| CoreError::io(path, e))
+}
+
+fn stage_bytes(path: &Path, bytes: &[u8]) -> Result<PendingFile> {
+    stage(path, |f| std::io::Write::write_all(f, bytes)).map_err(|e| CoreError::io(path, e))
+}
+
+/// The PNG of [`write_png`], complete on disk under a temporary name beside
+/// `path` until committed (see [`brdf_merl::atomic::commit_all`]).
+pub fn stage_png(path: &Path, picture: &Picture, labels: bool) -> Result<PendingFile> {
     let (w, h) = (picture.map.width as u32, picture.map.height as u32);
     let data = picture.rgb8(labels);
     let mut bytes = Vec::new();
@@ -246,11 +270,11 @@ pub fn write_png(path: &Path, picture: &Picture, labels: bool) -> Result<()> {
             .write_image_data(&data)
             .map_err(|e| CoreError::bad_file(path, e.to_string()))?;
     }
-    write_atomic(path, |f| std::io::Write::write_all(f, &bytes)).map_err(|e| CoreError::io(path, e))
+    stage_bytes(path, &bytes)
 }
 
-/// Write the linear albedo as a float RGB OpenEXR (atomically).
-pub fn write_exr(path: &Path, map: &AlbedoMap) -> Result<()> {
+/// The EXR of [`write_exr`], staged like [`stage_png`].
+pub fn stage_exr(path: &Path, map: &AlbedoMap) -> Result<PendingFile> {
     use exr::prelude::*;
     let w = map.width;
     let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
@@ -262,33 +286,102 @@ pub fn write_exr(path: &Path, map: &AlbedoMap) -> Result<()> {
         .write()
         .to_buffered(&mut cursor)
         .map_err(|e| CoreError::bad_file(path, e.to_string()))?;
-    write_atomic(path, |f| std::io::Write::write_all(f, cursor.get_ref()))
-        .map_err(|e| CoreError::io(path, e))
+    stage_bytes(path, cursor.get_ref())
 }
 
-/// Write the sidecar as pretty JSON (atomically).
-pub fn write_sidecar(path: &Path, sidecar: &Sidecar) -> Result<()> {
+/// The sidecar of [`write_sidecar`], staged like [`stage_png`].
+pub fn stage_sidecar(path: &Path, sidecar: &Sidecar) -> Result<PendingFile> {
     let json =
         serde_json::to_vec_pretty(sidecar).map_err(|e| CoreError::bad_file(path, e.to_string()))?;
-    write_atomic(path, |f| std::io::Write::write_all(f, &json)).map_err(|e| CoreError::io(path, e))
+    stage_bytes(path, &json)
 }
+
+/// The sidecar format version this build writes and reads.
+pub const SIDECAR_VERSION: u32 = 1;
+/// Largest width or height a sidecar may give.
+pub const MAX_SIDE: usize = 1 << 16;
 
 /// Read and check a sidecar.
 pub fn read_sidecar(path: &Path) -> Result<Sidecar> {
     let bytes = std::fs::read(path).map_err(|e| CoreError::io(path, e))?;
-    let s: Sidecar = serde_json::from_slice(&bytes)
-        .map_err(|e| CoreError::bad_file(path, format!("not a brdf-atlas map sidecar: {e}")))?;
-    if s.format != "brdf-atlas-map" || s.version != 1 {
-        return Err(CoreError::bad_file(
-            path,
-            format!(
-                "format {} version {}, expected brdf-atlas-map version 1",
-                s.format, s.version
-            ),
-        ));
+    Sidecar::from_json(path, &bytes)
+}
+
+impl Sidecar {
+    /// Parse and check the JSON of a sidecar: format, version, image size,
+    /// view, finite numbers, and every reference's pixel where the view puts
+    /// its latent point. `path` names the file in errors.
+    pub fn from_json(path: &Path, bytes: &[u8]) -> Result<Sidecar> {
+        let bad = |why: String| CoreError::bad_file(path, why);
+        if brdf_merl::table::is_lfs_pointer(bytes) {
+            return Err(bad("is a Git LFS pointer file, not a brdf-atlas map sidecar (run `git lfs pull` to fetch the real file)".into()));
+        }
+        let value: serde_json::Value = serde_json::from_slice(bytes)
+            .map_err(|e| bad(format!("not a brdf-atlas map sidecar (invalid JSON: {e})")))?;
+        if value.get("format").and_then(|v| v.as_str()) != Some("brdf-atlas-map") {
+            return Err(bad(
+                "not a brdf-atlas map sidecar (expected \"format\": \"brdf-atlas-map\")".into(),
+            ));
+        }
+        match value.get("version").and_then(|v| v.as_u64()) {
+            Some(v) if v == SIDECAR_VERSION as u64 => {}
+            Some(v) if v > SIDECAR_VERSION as u64 => {
+                return Err(bad(format!(
+                    "sidecar version {v} was written by a newer brdf-atlas (this build reads version {SIDECAR_VERSION}); upgrade brdf-atlas"
+                )));
+            }
+            _ => {
+                return Err(bad(format!(
+                    "sidecar version {}, expected {SIDECAR_VERSION}",
+                    value.get("version").unwrap_or(&serde_json::Value::Null)
+                )));
+            }
+        }
+        let s: Sidecar = serde_json::from_value(value)
+            .map_err(|e| bad(format!("malformed map sidecar: {e}")))?;
+        s.check().map_err(bad)?;
+        Ok(s)
     }
-    s.view
-        .check()
-        .map_err(|e| CoreError::bad_file(path, e.to_string()))?;
-    Ok(s)
+
+    fn check(&self) -> std::result::Result<(), String> {
+        let (w, h) = (self.width, self.height);
+        if !(1..=MAX_SIDE).contains(&w) || !(1..=MAX_SIDE).contains(&h) {
+            return Err(format!(
+                "image {w}x{h}, expected sides of 1 to {MAX_SIDE} pixels"
+            ));
+        }
+        self.view.check().map_err(|e| e.to_string())?;
+        if let Some(v) = self.contour_levels.iter().find(|v| !v.is_finite()) {
+            return Err(format!("contour level {v}, expected finite numbers"));
+        }
+        let [lo, hi] = self.luminance_range;
+        if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
+            return Err(format!(
+                "luminance range [{lo}, {hi}], expected finite numbers, low <= high"
+            ));
+        }
+        if self.references.len() > MAX_MATERIALS {
+            return Err(format!(
+                "{} references, expected at most {MAX_MATERIALS}",
+                self.references.len()
+            ));
+        }
+        for (i, r) in self.references.iter().enumerate() {
+            if !r.latent.iter().all(|v| v.abs() <= LATENT_LIMIT) {
+                return Err(format!(
+                    "reference {i} ({}) at {:?}, expected finite coordinates within +-{LATENT_LIMIT}",
+                    r.name, r.latent
+                ));
+            }
+            let want = self.view.latent_to_pixel(r.latent, w, h);
+            let tol = 1e-6 * w.max(h) as f64;
+            if !(0..2).all(|c| (r.pixel[c] - want[c]).abs() <= tol) {
+                return Err(format!(
+                    "reference {i} ({}) at pixel {:?}, but the view puts its latent point {:?} at {want:?}",
+                    r.name, r.pixel, r.latent
+                ));
+            }
+        }
+        Ok(())
+    }
 }

@@ -156,6 +156,11 @@ impl Store {
         // SAFETY: read-only map of a file we do not modify; see MerlFile::open.
         let map = unsafe { Mmap::map(&file) }.map_err(|e| CoreError::io(&path, e))?;
         let bad = |why: String| CoreError::bad_file(&path, why);
+        if brdf_merl::table::is_lfs_pointer(&map) {
+            return Err(bad(
+                "is a Git LFS pointer file, not a brdf-atlas store (run `git lfs pull` to fetch the real file)".into(),
+            ));
+        }
         if map.len() < HEADER || &map[..8] != MAGIC {
             return Err(bad(
                 "not a brdf-atlas store (missing BRDFSTOR header)".into()
@@ -163,6 +168,11 @@ impl Store {
         }
         let u32_at = |o: usize| u32::from_le_bytes(map[o..o + 4].try_into().expect("4 bytes"));
         let version = u32_at(8);
+        if version > VERSION {
+            return Err(bad(format!(
+                "store format version {version} was written by a newer brdf-atlas (this build reads version {VERSION}); upgrade brdf-atlas"
+            )));
+        }
         if version != VERSION {
             return Err(bad(format!(
                 "store format version {version}, this build reads version {VERSION}"
@@ -421,7 +431,12 @@ impl Dataset {
             if path.extension().is_some_and(|e| e == "binary") && path.is_file() {
                 paths.push(path);
             } else {
-                ignored.push((path, "not a .binary file".to_string()));
+                let why = if path.is_dir() {
+                    "a directory"
+                } else {
+                    "not a .binary file"
+                };
+                ignored.push((path, why.to_string()));
             }
         }
         if paths.is_empty() {

@@ -23,6 +23,7 @@ use std::sync::OnceLock;
 use brdf_atlas_core::map::{DEFAULT_SAMPLES, View};
 use brdf_atlas_core::model::{FitOptions, fit_dir, store_path_for};
 use brdf_atlas_core::{GplvmParams, Model, NoProgress, Precision, TransformKind};
+use brdf_atlas_hostile::{merl_cases, model_cases};
 use brdf_merl::angles::direction;
 use brdf_merl::synth::database;
 use brdf_merl::{Dims, MerlFile, Vec3};
@@ -218,6 +219,29 @@ fn build_fixture() -> Fixture {
     );
     line(&mut e, "bad_merl", &[], Some(&bad_merl));
     line(&mut e, "wrong_dims", &[], Some(&small));
+    // The generated corpus of broken files.
+    for (key, cases) in [
+        (
+            "hostile_open",
+            model_cases(&mkdir(&dir.join("hostile-models")), &model_path),
+        ),
+        (
+            "hostile_locate",
+            merl_cases(&mkdir(&dir.join("hostile-merl"))),
+        ),
+    ] {
+        for c in cases {
+            let name = c.names.file_name().unwrap().to_str().unwrap();
+            let status = c.status as i32;
+            writeln!(
+                e,
+                "{key} {status}\t{}\t{name}\t{}",
+                c.path.display(),
+                c.want
+            )
+            .unwrap();
+        }
+    }
     let expected = dir.join("expected.txt");
     std::fs::write(&expected, e).unwrap();
     Fixture {
@@ -225,6 +249,11 @@ fn build_fixture() -> Fixture {
         model: model_path,
         expected,
     }
+}
+
+fn mkdir(path: &Path) -> PathBuf {
+    std::fs::create_dir_all(path).unwrap();
+    path.to_path_buf()
 }
 
 fn run(cmd: &mut Command, what: &str) -> String {

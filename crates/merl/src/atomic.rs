@@ -42,6 +42,44 @@ where
     result
 }
 
+/// Write `fill`'s content to a temporary file beside `path` and sync it, but
+/// do not put it in place: the returned [`PendingFile`] does that on
+/// [`PendingFile::commit`] and removes the file if dropped. For outputs that
+/// must all be replaced together or not at all ([`commit_all`]).
+pub fn stage<F>(path: &Path, fill: F) -> io::Result<PendingFile>
+where
+    F: FnOnce(&mut BufWriter<&File>) -> io::Result<()>,
+{
+    let pending = PendingFile::create(path)?;
+    {
+        let mut w = BufWriter::with_capacity(1 << 20, pending.file());
+        fill(&mut w)?;
+        w.flush()?;
+    }
+    pending.file().sync_all()?;
+    Ok(pending)
+}
+
+/// Put staged files in place, in order. Every target is checked first (an
+/// existing directory cannot be replaced), so the renames, which do not
+/// fail otherwise within one directory, either all happen or none does;
+/// on an error every file not yet renamed is removed.
+pub fn commit_all(files: Vec<PendingFile>) -> Result<(), (PathBuf, io::Error)> {
+    for f in &files {
+        if f.target.is_dir() {
+            return Err((
+                f.target.clone(),
+                io::Error::new(io::ErrorKind::IsADirectory, "is a directory"),
+            ));
+        }
+    }
+    for f in files {
+        let target = f.target.clone();
+        f.commit(false).map_err(|e| (target, e))?;
+    }
+    Ok(())
+}
+
 /// A file being written in place under a temporary name, for writers that
 /// need random access (positioned writes from several threads). Dropped
 /// without [`PendingFile::commit`], it removes itself.
@@ -65,6 +103,11 @@ impl PendingFile {
             target: target.to_path_buf(),
             file: Some(file),
         })
+    }
+
+    /// The path the file takes on commit.
+    pub fn target(&self) -> &Path {
+        &self.target
     }
 
     /// The open temporary file.

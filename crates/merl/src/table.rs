@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use memmap2::Mmap;
 
 use crate::angles::{Dims, MAX_DIM, Vec3};
-use crate::atomic::write_atomic;
+use crate::atomic::{PendingFile, stage};
 use crate::error::{MerlError, Result};
 
 /// Bytes of the header.
@@ -37,6 +37,12 @@ pub fn physical(channel: usize, raw: f64) -> f64 {
 #[inline]
 pub fn raw_from_physical(channel: usize, value: f64) -> f64 {
     value / SCALE[channel]
+}
+
+/// Does `bytes` start like a Git LFS pointer file (the small text file a
+/// repository holds in place of a large file until `git lfs pull` fetches it)?
+pub fn is_lfs_pointer(bytes: &[u8]) -> bool {
+    bytes.starts_with(b"version https://git-lfs")
 }
 
 /// Does a raw value mark an unmeasured sample?
@@ -67,11 +73,10 @@ impl MerlFile {
     pub fn open(path: impl AsRef<Path>) -> Result<MerlFile> {
         let path = path.as_ref().to_path_buf();
         let file = std::fs::File::open(&path).map_err(|e| MerlError::io(&path, e))?;
-        let len = file.metadata().map_err(|e| MerlError::io(&path, e))?.len();
         // SAFETY: the map is read-only; if another process truncates the file
         // under us the OS may signal, which no safe reader can prevent.
         let map = unsafe { Mmap::map(&file) }.map_err(|e| MerlError::io(&path, e))?;
-        let dims = check_header(&path, &map, len)?;
+        let dims = check_header(&path, &map, map.len() as u64)?;
         let invalid = scan_values(&path, &map[HEADER_BYTES..])?;
         Ok(MerlFile {
             path,
@@ -123,7 +128,7 @@ impl MerlFile {
 }
 
 fn check_header(path: &Path, bytes: &[u8], len: u64) -> Result<Dims> {
-    if bytes.starts_with(b"version https://git-lfs") {
+    if is_lfs_pointer(bytes) {
         return Err(MerlError::LfsPointer {
             path: path.to_path_buf(),
         });
@@ -254,10 +259,35 @@ impl MerlTable {
         Ok(MerlFile::open(path)?.to_table())
     }
 
+    /// Validate and copy the bytes of a whole MERL file already in memory,
+    /// with the checks of [`MerlFile::open`]; `path` only names it in errors.
+    pub fn from_bytes(path: impl AsRef<Path>, bytes: &[u8]) -> Result<MerlTable> {
+        let path = path.as_ref();
+        let dims = check_header(path, bytes, bytes.len() as u64)?;
+        let data = &bytes[HEADER_BYTES..];
+        scan_values(path, data)?;
+        let values = data
+            .chunks_exact(8)
+            .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")))
+            .collect();
+        Ok(MerlTable { dims, values })
+    }
+
     /// Write in the MERL layout, atomically (temp file + rename).
     pub fn write(&self, path: impl AsRef<Path>) -> Result<()> {
         let path = path.as_ref();
-        write_atomic(path, |w| {
+        self.stage(path)?
+            .commit(true)
+            .map_err(|e| MerlError::io(path, e))
+    }
+
+    /// Write in the MERL layout under a temporary name beside `path`; the
+    /// file takes its place on [`PendingFile::commit`] (see
+    /// [`crate::atomic::commit_all`] for several files at once) and is
+    /// removed if dropped uncommitted.
+    pub fn stage(&self, path: impl AsRef<Path>) -> Result<PendingFile> {
+        let path = path.as_ref();
+        stage(path, |w| {
             for d in [self.dims.theta_h, self.dims.theta_d, self.dims.phi_d] {
                 w.write_all(&(d as i32).to_le_bytes())?;
             }

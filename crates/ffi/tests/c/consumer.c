@@ -49,7 +49,7 @@ static int failures = 0;
 
 /* ---- expected.txt ---- */
 
-#define MAX_LINES 256
+#define MAX_LINES 512
 static char *lines[MAX_LINES];
 static int line_count = 0;
 
@@ -160,6 +160,54 @@ static void check_open(void) {
     EXPECT(brdf_atlas_model_open(rest(need("model", 0)), &model), OK, "");
     CHECK(model != NULL, "open gave no handle");
     brdf_atlas_model_free(NULL);
+}
+
+/*
+ * The generated corpus of broken files (crates/hostile), one line each:
+ * "KEY STATUS<TAB>PATH<TAB>NAME<TAB>WANT". Opening the model (hostile_open)
+ * or locating the MERL file (hostile_locate) must give STATUS, a one-line
+ * message containing the file name NAME and the words WANT, and leave the
+ * out-parameter untouched.
+ */
+static void check_hostile(const char *key, int locate) {
+    const char *line;
+    int i;
+    for (i = 0; (line = find(key, i)) != NULL; i++) {
+        char buf[8192];
+        char *end, *path, *name, *want;
+        long status;
+        BrdfAtlasModel *sentinel = (BrdfAtlasModel *)&failures; /* never a real handle */
+        BrdfAtlasModel *out = sentinel;
+        BrdfAtlasLocation loc, untouched;
+        BrdfAtlasStatus s;
+        const char *m;
+
+        snprintf(buf, sizeof buf, "%s", line);
+        status = strtol(buf, &end, 10);
+        path = strchr(end, '\t');
+        name = path ? strchr(path + 1, '\t') : NULL;
+        want = name ? strchr(name + 1, '\t') : NULL;
+        if (want == NULL) {
+            fprintf(stderr, "malformed %s line: %s\n", key, line);
+            exit(2);
+        }
+        *path++ = '\0';
+        *name++ = '\0';
+        *want++ = '\0';
+        memset(&loc, 0x5a, sizeof loc);
+        memcpy(&untouched, &loc, sizeof loc);
+        s = locate ? brdf_atlas_model_locate(model, path, &loc) : brdf_atlas_model_open(path, &out);
+        m = brdf_atlas_last_error_message();
+        CHECK((long)s == status, "%s %s -> %d (%s), want %ld; message: %s", key, path, (int)s,
+              brdf_atlas_status_message(s), status, m);
+        CHECK(strstr(m, name) != NULL, "%s: message lacks the file name %s: %s", path, name, m);
+        CHECK(strstr(m, want) != NULL, "%s: message lacks \"%s\": %s", path, want, m);
+        CHECK(strchr(m, '\n') == NULL, "%s: message of more than one line: %s", path, m);
+        CHECK(out == sentinel, "%s: a failed open wrote *out", path);
+        CHECK(memcmp(&loc, &untouched, sizeof loc) == 0, "%s: a failed locate wrote *location",
+              path);
+    }
+    CHECK(i >= 15, "only %d %s lines in expected.txt", i, key);
 }
 
 static void check_facts(void) {
@@ -561,6 +609,8 @@ int main(int argc, char **argv) {
         fprintf(stderr, "cannot go on without a model\n");
         return 1;
     }
+    check_hostile("hostile_open", 0);
+    check_hostile("hostile_locate", 1);
     check_facts();
     check_reconstruct();
     check_eval_and_weights();
