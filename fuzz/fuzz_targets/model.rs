@@ -2,18 +2,18 @@
 //! store of the seed model (see brdf_atlas_hostile::fuzz::model).
 #![no_main]
 
-use std::path::PathBuf;
 use std::sync::OnceLock;
 
+use brdf_atlas_hostile::fuzz::{self, SeedModel};
 use libfuzzer_sys::fuzz_target;
 
-static MODEL: OnceLock<(tempfile::TempDir, PathBuf)> = OnceLock::new();
+static SEED: OnceLock<(tempfile::TempDir, SeedModel)> = OnceLock::new();
 
 fuzz_target!(|data: &[u8]| {
-    let (_, model) = MODEL.get_or_init(|| {
+    let (_, seed) = SEED.get_or_init(|| {
         let dir = tempfile::tempdir().expect("temp dir");
-        let model = brdf_atlas_hostile::small_model(dir.path());
-        (dir, model)
+        let seed = SeedModel::new(dir.path());
+        (dir, seed)
     });
-    brdf_atlas_hostile::fuzz::model(model, data);
+    fuzz::model(seed, data);
 });

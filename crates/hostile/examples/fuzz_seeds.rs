@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use brdf_atlas_core::model::store_path_for;
 use brdf_atlas_hostile::{
-    merl_bytes, merl_cases, model_cases, sidecar_cases, small_model, small_sidecar,
+    fuzz, merl_bytes, merl_cases, model_cases, sidecar_cases, small_model, small_sidecar,
 };
 use brdf_merl::Dims;
 use brdf_merl::synth::database;
@@ -45,7 +45,20 @@ fn main() {
     }
 
     let model = small_model(&t.join("seed"));
-    copy(&model, &out.join("model"), "valid-small.atlas");
+    // The store's checksum as the placeholder the model target fills in.
+    let text = std::fs::read_to_string(&model).unwrap();
+    let checksum = text
+        .split("\"checksum\": \"")
+        .nth(1)
+        .and_then(|rest| rest.split('"').next())
+        .expect("a checksum");
+    let placeholder = std::str::from_utf8(fuzz::CHECKSUM_PLACEHOLDER).unwrap();
+    std::fs::create_dir_all(out.join("model")).unwrap();
+    std::fs::write(
+        out.join("model").join("valid-small.atlas"),
+        text.replace(checksum, placeholder),
+    )
+    .unwrap();
     copy(
         &store_path_for(&model),
         &out.join("store"),

@@ -4,9 +4,9 @@
 //! whether the reader accepted them, and panics only on a bug: a reader
 //! that panics, or two paths to the same reader that disagree.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use brdf_atlas_core::model::ModelFile;
+use brdf_atlas_core::model::{ModelFile, store_path_for};
 use brdf_atlas_core::render::Sidecar;
 use brdf_atlas_core::{Model, NoProgress, Store};
 use brdf_merl::{MerlFile, MerlTable};
@@ -32,10 +32,53 @@ pub fn merl(dir: &Path, data: &[u8]) -> bool {
     }
 }
 
-/// The model loader: `data` as the JSON of the model at `model` (whose
-/// valid store lies beside it, see [`crate::small_model`]): checked on its
-/// own and, when it passes, opened with its store and asked for weights.
-pub fn model(model: &Path, data: &[u8]) -> bool {
+/// The text a model input may hold in place of the seed store's checksum
+/// (`"checksum": "@CHECKSUM@"`), so that the seed corpus stays valid when
+/// the store's bytes change with the code that writes them.
+pub const CHECKSUM_PLACEHOLDER: &[u8] = b"@CHECKSUM@";
+
+/// The valid model the `model` target opens inputs beside: a
+/// [`crate::small_model`] and its store's checksum.
+pub struct SeedModel {
+    /// The model file (each input is written here).
+    pub path: PathBuf,
+    checksum: String,
+}
+
+impl SeedModel {
+    /// Fit the seed model into `dir`.
+    pub fn new(dir: &Path) -> SeedModel {
+        let path = crate::small_model(dir);
+        let store = Store::open(store_path_for(&path)).expect("the seed store");
+        SeedModel {
+            path,
+            checksum: format!("{:016x}", store.checksum()),
+        }
+    }
+}
+
+/// The model loader: `data` as the JSON of the seed model's file (its valid
+/// store beside it; [`CHECKSUM_PLACEHOLDER`] stands for that store's
+/// checksum): checked on its own and, when it passes, opened with its store
+/// and asked for weights.
+pub fn model(seed: &SeedModel, data: &[u8]) -> bool {
+    let replaced;
+    let data = match data
+        .windows(CHECKSUM_PLACEHOLDER.len())
+        .position(|w| w == CHECKSUM_PLACEHOLDER)
+    {
+        Some(at) => {
+            replaced = [
+                &data[..at],
+                seed.checksum.as_bytes(),
+                &data[at + CHECKSUM_PLACEHOLDER.len()..],
+            ]
+            .concat();
+            &replaced[..]
+        }
+        None => data,
+    };
+    let model = &seed.path;
     let Ok(file) = ModelFile::from_json(model, data) else {
         return false;
     };

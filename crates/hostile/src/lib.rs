@@ -420,11 +420,7 @@ pub fn model_cases(dir: &Path, model: &Path) -> Vec<Case> {
             &|v| v["dims"] = json!([2147483648u64, 2147483648u64, 2147483648u64]),
             "\"dims\": dims 2147483648x2147483648x2147483648: a dimension is larger than 1024",
         ),
-        json(
-            "wrong-d.atlas",
-            &|v| v["d"] = json!(7),
-            "d = 7, but dims ",
-        ),
+        json("wrong-d.atlas", &|v| v["d"] = json!(7), "d = 7, but dims "),
         json(
             "negative-variance.atlas",
             &|v| v["signal_variance"] = json!(-2.0),

@@ -28,7 +28,7 @@ fn inputs(target: &str) -> Vec<PathBuf> {
 #[test]
 fn every_saved_fuzz_input_is_accepted_or_refused_cleanly() {
     let tmp = tempfile::tempdir().unwrap();
-    let model = small_model(&tmp.path().join("seed"));
+    let seed = fuzz::SeedModel::new(&tmp.path().join("seed"));
     let mut failures = Vec::new();
     for target in TARGETS {
         let files = inputs(target);
@@ -43,7 +43,7 @@ fn every_saved_fuzz_input_is_accepted_or_refused_cleanly() {
             let data = std::fs::read(file).unwrap();
             let run = || match target {
                 "merl" => fuzz::merl(tmp.path(), &data),
-                "model" => fuzz::model(&model, &data),
+                "model" => fuzz::model(&seed, &data),
                 "store" => fuzz::store(tmp.path(), &data),
                 _ => fuzz::sidecar(&data),
             };
