@@ -243,7 +243,7 @@ impl ModelFile {
                     p.len()
                 ));
             }
-            if let Some(v) = p.iter().find(|v| !(v.abs() <= LATENT_LIMIT)) {
+            if let Some(v) = p.iter().find(|v| v.is_nan() || v.abs() > LATENT_LIMIT) {
                 return Err(format!(
                     "latent point {i} ({}) has coordinate {v:?}, expected finite numbers within +-{LATENT_LIMIT} (a fit keeps them in [-1, 1])",
                     self.names[i]
