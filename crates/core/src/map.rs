@@ -15,6 +15,8 @@
 //!   pixels is one matrix product `C k(X_row)`. The sample count trades
 //!   accuracy for time (see the README's figures).
 
+use std::sync::OnceLock;
+
 use brdf_merl::Quadrature;
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
@@ -31,6 +33,20 @@ use crate::transform::InverseForm;
 /// Quadrature samples per pixel when a map needs them (non-linear transforms)
 /// and the caller gives none; see the README's figures for what it buys.
 pub const DEFAULT_SAMPLES: usize = 256;
+
+/// The parts of a map that depend on the model only, not on the view, size
+/// or sample count: built by the first map that needs them and kept, so
+/// that a viewer redrawing the map on every zoom or pan (the BRDF Explorer
+/// plugin does) pays once for the passes over the store behind them.
+#[derive(Default)]
+pub(crate) struct MapBasis {
+    /// [`Quadrature::dense`] with 2 sub-cells a bin.
+    rule: OnceLock<Quadrature>,
+    /// The linear map's `K^-1 A` (one N-vector per channel) and the mean's albedo.
+    linear: OnceLock<([Vec<f64>; 3], [f64; 3])>,
+    /// See [`Model::shape`].
+    shape: OnceLock<Vec<f64>>,
+}
 
 /// A window of the latent plane: `x` in `[x0, x1]`, `y` in `[y0, y1]`, y up.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -173,25 +189,49 @@ impl Model {
         (a, m)
     }
 
+    /// The dense albedo rule of the model's dims (2 sub-cells a bin), built once.
+    pub fn albedo_rule(&self) -> &Quadrature {
+        self.map_basis
+            .rule
+            .get_or_init(|| Quadrature::dense(self.dims(), 2))
+    }
+
     /// The model's mean material as reflectance per bin (channels averaged,
     /// unmeasured bins 0): the shape the map's quadrature rule assumes
-    /// within each box of bins ([`Quadrature::with_samples_shaped`]).
-    pub fn shape(&self) -> Vec<f64> {
-        let store = self.store();
-        let bins = self.dims().bins();
-        let (mean, unmeasured) = (store.mean(), store.unmeasured());
-        let mut shape = vec![0.0f64; bins];
-        let mut value = vec![0.0f64; bins];
-        for c in 0..3 {
-            self.transform
-                .inverse_run(0, &mean[c * bins..(c + 1) * bins], &mut value);
-            for ((s, v), &u) in shape.iter_mut().zip(&value).zip(&unmeasured[c * bins..]) {
-                if u == 0 {
-                    *s += v / 3.0;
+    /// within each box of bins ([`Quadrature::with_samples_shaped`]). Built once.
+    pub fn shape(&self) -> &[f64] {
+        self.map_basis.shape.get_or_init(|| {
+            let store = self.store();
+            let bins = self.dims().bins();
+            let (mean, unmeasured) = (store.mean(), store.unmeasured());
+            let mut shape = vec![0.0f64; bins];
+            let mut value = vec![0.0f64; bins];
+            for c in 0..3 {
+                self.transform
+                    .inverse_run(0, &mean[c * bins..(c + 1) * bins], &mut value);
+                for ((s, v), &u) in shape.iter_mut().zip(&value).zip(&unmeasured[c * bins..]) {
+                    if u == 0 {
+                        *s += v / 3.0;
+                    }
                 }
             }
-        }
-        shape
+            shape
+        })
+    }
+
+    /// The linear map's basis: `K^-1 A` per channel (`A` the per-material
+    /// albedos of [`Model::material_albedos`] with [`Model::albedo_rule`])
+    /// and the mean material's albedo. Built once.
+    fn linear_basis(&self) -> &([Vec<f64>; 3], [f64; 3]) {
+        self.map_basis.linear.get_or_init(|| {
+            let (a, m) = self.material_albedos(self.albedo_rule());
+            let n = a.len();
+            let b = self.llt_solve(&Mat::from_fn(n, 3, |i, c| a[i][c]));
+            (
+                std::array::from_fn(|c| (0..n).map(|i| b[(i, c)]).collect()),
+                m,
+            )
+        })
     }
 
     /// The albedo map of a `width x height` image of `view`. `samples`:
@@ -251,12 +291,7 @@ impl Model {
                         self.file().transform.name()
                     )));
                 }
-                let rule = Quadrature::dense(self.dims(), 2);
-                let (a, m) = self.material_albedos(&rule);
-                let b = self.llt_solve(&Mat::from_fn(n, 3, |i, c| a[i][c]));
-                let cols: Vec<Vec<f64>> = (0..3)
-                    .map(|c| (0..n).map(|i| b[(i, c)]).collect())
-                    .collect();
+                let (cols, m) = self.linear_basis();
                 // albedo(x, y)_c = m_c + sum_i ex_i(x) (ey_i(y) B_ic): per row, the
                 // column factors meet one N-vector per channel.
                 rgb.par_chunks_mut(width).enumerate().for_each(|(py, row)| {
@@ -266,7 +301,7 @@ impl Model {
                         .map(|col| ey.iter().zip(col).map(|(e, b)| e * b).collect())
                         .collect();
                     for (out, ex) in row.iter_mut().zip(ex.chunks_exact(n)) {
-                        for (o, (v, mc)) in out.iter_mut().zip(v.iter().zip(m)) {
+                        for (o, (v, mc)) in out.iter_mut().zip(v.iter().zip(*m)) {
                             *o = (mc + dot::dot(v, ex)) as f32;
                         }
                     }
@@ -275,7 +310,8 @@ impl Model {
                 AlbedoMethod::Linear
             }
             Some(s) => {
-                let rule = Quadrature::with_samples_shaped(self.dims(), s.max(1), &self.shape());
+                let rule =
+                    Quadrature::with_samples_shaped(self.albedo_rule(), s.max(1), self.shape());
                 let store = self.store();
                 let bins = store.dims().bins();
                 // The rows the rule reads (measured ones only), grouped by channel,

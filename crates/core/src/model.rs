@@ -20,6 +20,7 @@ use crate::gplvm::{CheckedParams, Fit};
 use crate::incremental::DriftStats;
 use crate::kernel::Kernel;
 use crate::likelihood::GramData;
+use crate::map::MapBasis;
 use crate::optim::OptimizerKind;
 use crate::store::{Dataset, Precision, Store, build_store};
 use crate::transform::{Transform, TransformKind};
@@ -150,6 +151,8 @@ pub struct Model {
     llt: faer::linalg::solvers::Llt<f64>,
     pub(crate) transform: Box<dyn Transform>,
     pub(crate) gram: Mat<f64>,
+    /// What every map of this model shares, built on first use.
+    pub(crate) map_basis: MapBasis,
 }
 
 impl std::fmt::Debug for Model {
@@ -347,6 +350,7 @@ impl Model {
             llt,
             transform,
             gram,
+            map_basis: MapBasis::default(),
         })
     }
 
