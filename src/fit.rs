@@ -159,6 +159,13 @@ pub fn write_summary(out: &mut impl Write, options: &Options, fitted: &Fitted) -
         "  numerics   {} rank-one updates, {} refactorisations, {} dense fallbacks, max drift {:.1e} (cost), {:.1e} (K^-1)",
         d.updates, d.refreshes, d.dense_fallbacks, d.max_cost_drift, d.max_inverse_drift
     )?;
+    if let Some(peak) = r.peak_heap {
+        writeln!(
+            out,
+            "  memory     peak heap {} (the inputs and the store are memory-mapped files, not heap)",
+            size(peak as u64)
+        )?;
+    }
     let total = r.scan_time + r.store_time + r.optimise_time + r.save_time;
     writeln!(
         out,

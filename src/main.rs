@@ -443,6 +443,10 @@ fn run(cli: Cli) -> Result<ExitCode, Error> {
     }
 }
 
+/// Heap accounting for `fit`'s summary (peak heap).
+#[global_allocator]
+static HEAP: brdf_atlas_core::heap::Counting = brdf_atlas_core::heap::Counting;
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match run(cli) {

@@ -13,6 +13,7 @@ pub mod error;
 pub mod fastexp;
 pub mod fastlog;
 pub mod gplvm;
+pub mod heap;
 pub mod incremental;
 pub mod kernel;
 pub mod likelihood;
@@ -36,3 +37,9 @@ pub use model::Model;
 pub use optim::OptimizerKind;
 pub use store::{Precision, Store};
 pub use transform::TransformKind;
+
+// The unit tests run under the counting allocator, so `heap` is tested as a
+// binary uses it.
+#[cfg(test)]
+#[global_allocator]
+static HEAP: heap::Counting = heap::Counting;

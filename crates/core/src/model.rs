@@ -446,7 +446,8 @@ pub struct FitReport {
     pub model_path: PathBuf,
     /// The store written.
     pub store_path: PathBuf,
-    /// Opening and validating the MERL files.
+    /// Opening the MERL files (mapping, header and size checks; their
+    /// values are checked as the store pass reads them).
     pub scan_time: Duration,
     /// The one pass building the store and the Gram matrix.
     pub store_time: Duration,
@@ -454,6 +455,10 @@ pub struct FitReport {
     pub optimise_time: Duration,
     /// Writing the model and checksumming the store.
     pub save_time: Duration,
+    /// Largest heap in use during the fit, when the binary counts it
+    /// ([`crate::heap::Counting`]); the inputs and the store are mapped
+    /// files, not heap.
+    pub peak_heap: Option<usize>,
 }
 
 /// Fit a directory of MERL files and write `model` and `model.store`.
@@ -464,7 +469,8 @@ pub fn fit_dir(
     progress: &dyn Progress,
 ) -> Result<FitReport> {
     let t0 = Instant::now();
-    let data = Dataset::open_dir(dir)?;
+    crate::heap::reset_peak();
+    let data = Dataset::map_dir(dir)?;
     let scan_time = t0.elapsed();
     let t1 = Instant::now();
     let store_path = store_path_for(model);
@@ -572,6 +578,7 @@ fn fit_staged(
         store_time,
         optimise_time,
         save_time,
+        peak_heap: crate::heap::peak(),
     })
 }
 

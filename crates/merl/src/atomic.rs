@@ -168,6 +168,31 @@ impl PendingFile {
         })
     }
 
+    /// Size the file to `len` bytes and reserve its disk blocks up front
+    /// (`fallocate`), where the file system can: a full disk is then an
+    /// error here, before any work, and positioned writes into the reserved
+    /// range are cheaper (no delayed-allocation bookkeeping page by page:
+    /// 1.75 GB of store writes took about 0.4 s instead of 0.6-0.9 s here).
+    pub fn allocate(&self, len: u64) -> io::Result<()> {
+        let file = self.file();
+        file.set_len(len)?;
+        #[cfg(target_os = "linux")]
+        if len > 0 {
+            use std::os::fd::AsRawFd;
+            let off = libc::off_t::try_from(len)
+                .map_err(|_| io::Error::new(io::ErrorKind::InvalidInput, "file too large"))?;
+            // SAFETY: a valid open file descriptor; plain integer arguments.
+            if unsafe { libc::fallocate(file.as_raw_fd(), 0, 0, off) } != 0 {
+                let e = io::Error::last_os_error();
+                // Not supported by this file system: stay sparse.
+                if !matches!(e.raw_os_error(), Some(libc::EOPNOTSUPP | libc::ENOSYS)) {
+                    return Err(e);
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// The path the file takes on commit.
     pub fn target(&self) -> &Path {
         &self.target
@@ -254,7 +279,7 @@ mod tests {
         }
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
         let p = PendingFile::create(&path).unwrap();
-        p.file().set_len(10).unwrap();
+        p.allocate(10).unwrap();
         p.commit(true).unwrap();
         assert_eq!(std::fs::metadata(&path).unwrap().len(), 10);
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);

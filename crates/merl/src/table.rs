@@ -56,7 +56,7 @@ pub struct MerlFile {
     path: PathBuf,
     dims: Dims,
     map: Mmap,
-    invalid: [usize; 3],
+    invalid: std::sync::OnceLock<[usize; 3]>,
 }
 
 impl std::fmt::Debug for MerlFile {
@@ -82,7 +82,51 @@ impl MerlFile {
             path,
             dims,
             map,
-            invalid,
+            invalid: invalid.into(),
+        })
+    }
+
+    /// Map a MERL file and check its header and size only: for a reader that
+    /// streams every value anyway and checks each run with
+    /// [`MerlFile::check_finite`] (a fit's store pass), which saves a whole
+    /// pass over the data.
+    pub fn map(path: impl AsRef<Path>) -> Result<MerlFile> {
+        let path = path.as_ref().to_path_buf();
+        let file = std::fs::File::open(&path).map_err(|e| MerlError::io(&path, e))?;
+        // SAFETY: as in `open`.
+        let map = unsafe { Mmap::map(&file) }.map_err(|e| MerlError::io(&path, e))?;
+        let dims = check_header(&path, &map, map.len() as u64)?;
+        Ok(MerlFile {
+            path,
+            dims,
+            map,
+            invalid: std::sync::OnceLock::new(),
+        })
+    }
+
+    /// Check that raw values `start .. start + values.len()` (as read by
+    /// [`MerlFile::copy_raw`]) are finite; the error names the first one that
+    /// is not, as [`MerlFile::open`] would.
+    pub fn check_finite(&self, start: usize, values: &[f64]) -> Result<()> {
+        // Branch-free (vectorises): is any exponent field all ones?
+        let non_finite = values.iter().fold(0u64, |a, v| {
+            a | ((v.to_bits() & EXPONENT) == EXPONENT) as u64
+        });
+        if non_finite == 0 {
+            return Ok(());
+        }
+        let (k, &value) = values
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !v.is_finite())
+            .expect("a non-finite value was seen");
+        let (index, bins) = (start + k, self.dims.bins());
+        Err(MerlError::NonFinite {
+            path: self.path.clone(),
+            index,
+            channel: CHANNELS[index / bins],
+            bin: index % bins,
+            value,
         })
     }
 
@@ -98,7 +142,14 @@ impl MerlFile {
 
     /// Count of unmeasured (negative) values, per channel.
     pub fn invalid_counts(&self) -> [usize; 3] {
-        self.invalid
+        *self.invalid.get_or_init(|| {
+            let bins = self.dims.bins();
+            std::array::from_fn(|c| {
+                let mut run = vec![0.0; bins];
+                self.copy_raw(c * bins, &mut run);
+                run.iter().filter(|v| is_invalid(**v)).count()
+            })
+        })
     }
 
     /// Raw value at flat index `i` (channel-major: `channel * bins + bin`).
@@ -497,6 +548,24 @@ mod tests {
             assert!(err.contains(&name), "{err}");
             assert!(err.contains(want), "{name}: {err}");
             assert!(!err.contains('\n'), "one line: {err}");
+            // Mapped without the scan, the same values checked in runs (as a
+            // fit's store pass does) give the same message, or the header's.
+            let lazy = match MerlFile::map(&path) {
+                Err(e) => e.to_string(),
+                Ok(f) => {
+                    let mut run = [0.0; 7];
+                    (0..f.dims().values())
+                        .step_by(7)
+                        .find_map(|start| {
+                            let run = &mut run[..7.min(f.dims().values() - start)];
+                            f.copy_raw(start, run);
+                            f.check_finite(start, run).err()
+                        })
+                        .expect("an error")
+                        .to_string()
+                }
+            };
+            assert_eq!(lazy, err);
         }
         let missing = MerlFile::open(d.join("missing.binary"))
             .unwrap_err()
@@ -511,6 +580,8 @@ mod tests {
         let t = small();
         t.write(&p).unwrap();
         let f = MerlFile::open(&p).unwrap();
+        let lazy = MerlFile::map(&p).unwrap();
+        assert_eq!(lazy.invalid_counts(), f.invalid_counts());
         assert_eq!(f.dims(), t.dims());
         let mut buf = vec![0.0; 10];
         f.copy_raw(50, &mut buf);
