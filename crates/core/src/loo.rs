@@ -40,7 +40,7 @@ use crate::fastlog::log1p;
 use crate::kernel::Kernel;
 use crate::likelihood::factor;
 use crate::store::{Rows, Store};
-use crate::transform::{InverseForm, TransformKind};
+use crate::transform::{InverseForm, Transform, TransformKind};
 
 /// Rows of the store per block of the LOO pass.
 const BLOCK: usize = 1024;
@@ -244,17 +244,33 @@ pub fn evaluate(
     let transform = store.transform().build(dims);
     let blocks = rows.div_ceil(BLOCK);
     let groups = GROUPS.min(blocks.max(1));
-    let unmeasured = store.unmeasured();
-    let mean = store.mean();
+    let scoring = Scoring {
+        n,
+        bins,
+        mean: store.mean(),
+        unmeasured: store.unmeasured(),
+        grazing: &grazing,
+        cos: &cos,
+        transform: transform.as_ref(),
+        log_space,
+    };
     progress.start("loo", rows as u64);
     let partials: Vec<Partial> = (0..groups)
         .into_par_iter()
         .map(|g| {
-            let (mut et, mut ef, mut el) = (vec![0.0; mn], vec![0.0; mn], vec![0.0; mn]);
+            let mut sums = Sums {
+                transformed: vec![0.0; mn],
+                raw: vec![0.0; mn],
+                log: vec![0.0; mn],
+            };
             let mut scored = 0usize;
             let mut zbuf = vec![0.0f64; BLOCK * n];
             let mut out = vec![0.0f64; BLOCK * mn];
-            let (mut tt, mut ft, mut lt) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+            let mut row = RowScratch {
+                truth: vec![0.0; n],
+                reflectance: vec![0.0; n],
+                log: vec![0.0; n],
+            };
             for b in (g * blocks / groups)..((g + 1) * blocks / groups) {
                 let r0 = b * BLOCK;
                 let r1 = (r0 + BLOCK).min(rows);
@@ -270,78 +286,10 @@ pub fn evaluate(
                 let zc = MatRef::from_column_major_slice(z, n, len);
                 let o = faer::MatMut::from_column_major_slice_mut(&mut out[..len * mn], mn, len);
                 matmul(o, Accum::Replace, stacked.as_ref(), zc, 1.0, Par::Seq);
-                for k in 0..len {
-                    let row = r0 + k;
-                    let bin = row % bins;
-                    let m0 = mean[row];
-                    let zr = &z[k * n..(k + 1) * n];
-                    let pred = &out[k * mn..(k + 1) * mn];
-                    for (t, &zi) in tt.iter_mut().zip(zr) {
-                        *t = m0 + zi;
-                    }
-                    for (m, chunk) in pred.chunks_exact(n).enumerate() {
-                        let acc = &mut et[m * n..(m + 1) * n];
-                        for ((a, &p), &t) in acc.iter_mut().zip(chunk).zip(&tt) {
-                            let d = m0 + p - t;
-                            *a += d * d;
-                        }
-                    }
-                    if unmeasured[row] != 0 || grazing[bin] {
-                        continue;
-                    }
-                    scored += 1;
-                    let c = cos[bin];
-                    // Reflectance and cosine-weighted log of the true values.
-                    match transform.inverse_form(bin) {
-                        InverseForm::Exp(s) => {
-                            for ((f, l), &t) in ft.iter_mut().zip(lt.iter_mut()).zip(&tt) {
-                                *f = s * (crate::fastexp::exp(t) - 1.0).max(0.0);
-                                *l = t.max(0.0);
-                            }
-                        }
-                        InverseForm::Linear(s) => {
-                            for ((f, l), &t) in ft.iter_mut().zip(lt.iter_mut()).zip(&tt) {
-                                *f = (s * t).max(0.0);
-                                *l = log1p(*f * c);
-                            }
-                        }
-                    }
-                    for (m, chunk) in pred.chunks_exact(n).enumerate() {
-                        let (af, al) = (&mut ef[m * n..(m + 1) * n], &mut el[m * n..(m + 1) * n]);
-                        let it = af
-                            .iter_mut()
-                            .zip(al.iter_mut())
-                            .zip(chunk)
-                            .zip(ft.iter().zip(&lt));
-                        match transform.inverse_form(bin) {
-                            // log(1 + f c) of f = (e^t - 1) / c is t itself (for t >= 0).
-                            InverseForm::Exp(s) if log_space => {
-                                it.for_each(|(((a, l), &p), (&f, &lv))| {
-                                    let t = m0 + p;
-                                    let e = s * (crate::fastexp::exp(t) - 1.0).max(0.0) - f;
-                                    let d = t.max(0.0) - lv;
-                                    *a += e * e;
-                                    *l += d * d;
-                                })
-                            }
-                            InverseForm::Exp(s) => it.for_each(|(((a, l), &p), (&f, &lv))| {
-                                let fp = s * (crate::fastexp::exp(m0 + p) - 1.0).max(0.0);
-                                let (e, d) = (fp - f, log1p(fp * c) - lv);
-                                *a += e * e;
-                                *l += d * d;
-                            }),
-                            InverseForm::Linear(s) => it.for_each(|(((a, l), &p), (&f, &lv))| {
-                                let fp = (s * (m0 + p)).max(0.0);
-                                let (e, d) = (fp - f, log1p(fp * c) - lv);
-                                *a += e * e;
-                                *l += d * d;
-                            }),
-                        }
-                    }
-                }
+                scored += score_block(&scoring, r0, z, &out[..len * mn], &mut sums, &mut row);
                 progress.advance(len as u64);
             }
-            (et, ef, el, scored)
+            (sums.transformed, sums.raw, sums.log, scored)
         })
         .collect();
     progress.finish();
@@ -364,6 +312,165 @@ pub fn evaluate(
         scored_rows: scored,
         rows,
     })
+}
+
+/// What the error sums of [`evaluate`] read, for every block.
+struct Scoring<'a> {
+    n: usize,
+    bins: usize,
+    mean: &'a [f64],
+    unmeasured: &'a [u8],
+    grazing: &'a [bool],
+    cos: &'a [f64],
+    transform: &'a dyn Transform,
+    log_space: bool,
+}
+
+/// Squared errors per (predictor, material): transformed, reflectance, log.
+struct Sums {
+    transformed: Vec<f64>,
+    raw: Vec<f64>,
+    log: Vec<f64>,
+}
+
+/// One row's true values: transformed, reflectance, cosine-weighted log.
+struct RowScratch {
+    truth: Vec<f64>,
+    reflectance: Vec<f64>,
+    log: Vec<f64>,
+}
+
+/// Add the squared errors of the predictions `out` (`mn` per row) of the
+/// rows `r0..` whose centred values are `z` (`n` per row) into `sums`;
+/// returns the number of rows scored in reflectance and log.
+///
+/// `fastlog::log1p` is written with fused multiply-adds: where the CPU has
+/// FMA this runs compiled for it (instructions, not library calls; the same
+/// bits), as plain loops, so nothing falls back to code without it.
+fn score_block(
+    s: &Scoring<'_>,
+    r0: usize,
+    z: &[f64],
+    out: &[f64],
+    sums: &mut Sums,
+    row: &mut RowScratch,
+) -> usize {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the CPU has AVX2 and FMA (checked just above).
+        return unsafe { score_block_fma(s, r0, z, out, sums, row) };
+    }
+    score_block_portable(s, r0, z, out, sums, row)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn score_block_fma(
+    s: &Scoring<'_>,
+    r0: usize,
+    z: &[f64],
+    out: &[f64],
+    sums: &mut Sums,
+    row: &mut RowScratch,
+) -> usize {
+    score_block_portable(s, r0, z, out, sums, row)
+}
+
+#[inline(always)]
+fn score_block_portable(
+    s: &Scoring<'_>,
+    r0: usize,
+    z: &[f64],
+    out: &[f64],
+    sums: &mut Sums,
+    row: &mut RowScratch,
+) -> usize {
+    let n = s.n;
+    let mn = out.len() / (z.len() / n);
+    let mut scored = 0;
+    for (k, (zr, pred)) in z.chunks_exact(n).zip(out.chunks_exact(mn)).enumerate() {
+        let r = r0 + k;
+        let bin = r % s.bins;
+        let m0 = s.mean[r];
+        for (t, &zi) in row.truth.iter_mut().zip(zr) {
+            *t = m0 + zi;
+        }
+        for (chunk, acc) in pred
+            .chunks_exact(n)
+            .zip(sums.transformed.chunks_exact_mut(n))
+        {
+            for ((a, &p), &t) in acc.iter_mut().zip(chunk).zip(&row.truth) {
+                let d = m0 + p - t;
+                *a += d * d;
+            }
+        }
+        if s.unmeasured[r] != 0 || s.grazing[bin] {
+            continue;
+        }
+        scored += 1;
+        let c = s.cos[bin];
+        let form = s.transform.inverse_form(bin);
+        // Reflectance and cosine-weighted log of the true values.
+        let truth = row
+            .reflectance
+            .iter_mut()
+            .zip(row.log.iter_mut())
+            .zip(&row.truth);
+        match form {
+            InverseForm::Exp(sc) => {
+                for ((f, l), &t) in truth {
+                    *f = sc * (crate::fastexp::exp(t) - 1.0).max(0.0);
+                    *l = t.max(0.0);
+                }
+            }
+            InverseForm::Linear(sc) => {
+                for ((f, l), &t) in truth {
+                    *f = (sc * t).max(0.0);
+                    *l = log1p(*f * c);
+                }
+            }
+        }
+        let per_method = pred
+            .chunks_exact(n)
+            .zip(sums.raw.chunks_exact_mut(n))
+            .zip(sums.log.chunks_exact_mut(n));
+        for ((chunk, af), al) in per_method {
+            let values = af
+                .iter_mut()
+                .zip(al.iter_mut())
+                .zip(chunk)
+                .zip(row.reflectance.iter().zip(&row.log));
+            match form {
+                // log(1 + f c) of f = (e^t - 1) / c is t itself (for t >= 0).
+                InverseForm::Exp(sc) if s.log_space => {
+                    for (((a, l), &p), (&f, &lv)) in values {
+                        let t = m0 + p;
+                        let e = sc * (crate::fastexp::exp(t) - 1.0).max(0.0) - f;
+                        let d = t.max(0.0) - lv;
+                        *a += e * e;
+                        *l += d * d;
+                    }
+                }
+                InverseForm::Exp(sc) => {
+                    for (((a, l), &p), (&f, &lv)) in values {
+                        let fp = sc * (crate::fastexp::exp(m0 + p) - 1.0).max(0.0);
+                        let (e, d) = (fp - f, log1p(fp * c) - lv);
+                        *a += e * e;
+                        *l += d * d;
+                    }
+                }
+                InverseForm::Linear(sc) => {
+                    for (((a, l), &p), (&f, &lv)) in values {
+                        let fp = (sc * (m0 + p)).max(0.0);
+                        let (e, d) = (fp - f, log1p(fp * c) - lv);
+                        *a += e * e;
+                        *l += d * d;
+                    }
+                }
+            }
+        }
+    }
+    scored
 }
 
 #[cfg(test)]
