@@ -15,7 +15,14 @@
 //!
 //! The trace term follows from the same vectors:
 //! `tr(K'^-1 Y) = tr(K^-1 Y) - v1^T Y v1 / g1 + v2^T Y v2 / g2`. All of it
-//! needs three matrix-vector products (`K^-1 u`, `Y K^-1 u`, `Y K^-1 e_i`).
+//! needs three matrix-vector products (`p = K^-1 u`, `Y p`, `Y K^-1 e_i`),
+//! the last of which depends only on `i` and the state: it is kept from one
+//! trial of point `i` to the next until a move is applied, so a trial costs
+//! two products of [`crate::symmetric`] (about two thirds of the trials reuse
+//! it). An applied move updates `K^-1` by `s2 s2^T - s1 s1^T` with
+//! `s_k = v_k / sqrt g_k`, which keeps it exactly symmetric. The kernel row of
+//! a trial is one vectorised loop ([`crate::fastexp`]; the whole `K` of the
+//! state is built with the same `exp`, so its rows and a fresh `K` agree).
 //!
 //! `log|K|` is kept in log space (det K underflows: about 1e-400 for N = 100,
 //! mu = 1e-4). Chains of updates drift when `cond(K)` is large (up to about
@@ -32,6 +39,7 @@ use faer::{Mat, MatRef};
 use crate::error::Result;
 use crate::kernel::Kernel;
 use crate::likelihood::{GramData, factor};
+use crate::symmetric::{rank2_update, symv, symv2};
 
 /// Relative cost drift allowed between refactorisations; the refresh interval adapts to keep under it.
 const TARGET_DRIFT: f64 = 1e-10;
@@ -82,8 +90,12 @@ pub struct IncrementalCost<'a> {
     n: usize,
     q: usize,
     x: Vec<f64>,
+    // The points coordinate by coordinate (`q` runs of `n`), for the kernel row.
+    xt: Vec<f64>,
     k: Vec<f64>,
     m: Vec<f64>,
+    // The buffer of the next refactorisation's `K^-1`.
+    fresh: Vec<f64>,
     logdet: f64,
     trace: f64,
     max_interval: u64,
@@ -97,38 +109,81 @@ pub struct IncrementalCost<'a> {
     p: Vec<f64>,
     yp: Vec<f64>,
     ym: Vec<f64>,
+    // `ym = Y K^-1 e_i` and `mym = e_i^T K^-1 Y K^-1 e_i` hold for this `i` and the current `K^-1`.
+    ym_of: Option<usize>,
+    mym: f64,
     v1: Vec<f64>,
     v2: Vec<f64>,
     g1: f64,
     g2: f64,
+    alpha: f64,
+    beta: f64,
     dtrace: f64,
     _data: std::marker::PhantomData<&'a GramData>,
 }
 
-/// `out = A x` for a column-major `n x n` matrix `A`.
-fn matvec(a: &[f64], n: usize, x: &[f64], out: &mut [f64]) {
-    out.fill(0.0);
-    for (c, &xc) in x.iter().enumerate() {
-        if xc != 0.0 {
-            for (o, v) in out.iter_mut().zip(&a[c * n..(c + 1) * n]) {
-                *o += xc * v;
-            }
-        }
-    }
+/// The inner product of two state vectors (the lanes of [`crate::dot::dot`]).
+fn vdot(a: &[f64], b: &[f64]) -> f64 {
+    crate::dot::dot(a, b)
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-fn to_vec(m: MatRef<'_, f64>) -> Vec<f64> {
-    let mut v = Vec::with_capacity(m.nrows() * m.ncols());
+/// A square matrix column by column into `out`.
+fn copy_columns(m: &Mat<f64>, out: &mut Vec<f64>) {
+    out.clear();
     for j in 0..m.ncols() {
-        for i in 0..m.nrows() {
-            v.push(m[(i, j)]);
+        out.extend_from_slice(m.col_as_slice(j));
+    }
+}
+
+/// `(max |a_k - b_k|, max |a_k|)`, in four lanes so the scan vectorises (a maximum is exact in any order).
+fn max_diff_and_abs(a: &[f64], b: &[f64]) -> (f64, f64) {
+    let (mut diff, mut abs) = ([0.0f64; 4], [0.0f64; 4]);
+    let split = a.len() / 4 * 4;
+    for (x, y) in a[..split].chunks_exact(4).zip(b[..split].chunks_exact(4)) {
+        for k in 0..4 {
+            diff[k] = diff[k].max((x[k] - y[k]).abs());
+            abs[k] = abs[k].max(x[k].abs());
         }
     }
-    v
+    for (x, y) in a[split..].iter().zip(&b[split..]) {
+        diff[0] = diff[0].max((x - y).abs());
+        abs[0] = abs[0].max(x.abs());
+    }
+    let fold = |v: [f64; 4]| v.iter().fold(0.0f64, |a, &b| a.max(b));
+    (fold(diff), fold(abs))
+}
+
+/// `out[j] = exp(-|to - x_j|^2 / denom)` for the points `xt` stored
+/// coordinate by coordinate (`to.len()` runs of `out.len()`); the squared
+/// distance is summed as [`Kernel::eval`] sums it.
+fn kernel_row(xt: &[f64], to: &[f64], denom: f64, out: &mut [f64]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2 (checked just above).
+        return unsafe { kernel_row_avx2(xt, to, denom, out) };
+    }
+    kernel_row_body(xt, to, denom, out)
+}
+
+#[inline(always)]
+fn kernel_row_body(xt: &[f64], to: &[f64], denom: f64, out: &mut [f64]) {
+    out.fill(0.0);
+    for (&t, xc) in to.iter().zip(xt.chunks_exact(out.len())) {
+        for (o, &x) in out.iter_mut().zip(xc) {
+            let d = t - x;
+            *o += d * d;
+        }
+    }
+    for o in out.iter_mut() {
+        *o = crate::fastexp::exp(-*o / denom);
+    }
+}
+
+/// [`kernel_row_body`] compiled for AVX2: the same operations four wide, the same bits.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn kernel_row_avx2(xt: &[f64], to: &[f64], denom: f64, out: &mut [f64]) {
+    kernel_row_body(xt, to, denom, out)
 }
 
 impl<'a> IncrementalCost<'a> {
@@ -142,7 +197,11 @@ impl<'a> IncrementalCost<'a> {
         let (n, q) = (x.nrows(), x.ncols());
         let mut s = IncrementalCost {
             kernel,
-            y: to_vec(data.y()),
+            y: {
+                let mut y = Vec::new();
+                copy_columns(&data.y().to_owned(), &mut y);
+                y
+            },
             d: data.d() as f64,
             n,
             q,
@@ -150,8 +209,13 @@ impl<'a> IncrementalCost<'a> {
                 .flat_map(|i| (0..q).map(move |c| (i, c)))
                 .map(|(i, c)| x[(i, c)])
                 .collect(),
+            xt: (0..q)
+                .flat_map(|c| (0..n).map(move |i| (i, c)))
+                .map(|(i, c)| x[(i, c)])
+                .collect(),
             k: vec![0.0; n * n],
             m: vec![0.0; n * n],
+            fresh: Vec::with_capacity(n * n),
             logdet: 0.0,
             trace: 0.0,
             max_interval: refresh_every.max(1),
@@ -164,10 +228,14 @@ impl<'a> IncrementalCost<'a> {
             p: vec![0.0; n],
             yp: vec![0.0; n],
             ym: vec![0.0; n],
+            ym_of: None,
+            mym: 0.0,
             v1: vec![0.0; n],
             v2: vec![0.0; n],
             g1: 1.0,
             g2: 1.0,
+            alpha: 0.0,
+            beta: 0.0,
             dtrace: 0.0,
             _data: std::marker::PhantomData,
         };
@@ -176,17 +244,25 @@ impl<'a> IncrementalCost<'a> {
         Ok(s)
     }
 
+    /// `2 l^2`, as [`Kernel::eval`] forms it.
+    fn denom(&self) -> f64 {
+        2.0 * self.kernel.length_scale * self.kernel.length_scale
+    }
+
     fn fill_kernel(&mut self) {
+        let (n, q, denom) = (self.n, self.q, self.denom());
+        for (i, col) in self.k.chunks_exact_mut(n).enumerate() {
+            kernel_row(&self.xt, &self.x[i * q..(i + 1) * q], denom, col);
+            col[i] = 1.0 + self.kernel.noise;
+        }
+    }
+
+    /// Put point `i` at `to` in both layouts.
+    fn set_point(&mut self, i: usize, to: &[f64]) {
         let (n, q) = (self.n, self.q);
-        for i in 0..n {
-            for j in 0..n {
-                self.k[j * n + i] = if i == j {
-                    1.0 + self.kernel.noise
-                } else {
-                    self.kernel
-                        .eval(&self.x[i * q..(i + 1) * q], &self.x[j * q..(j + 1) * q])
-                };
-            }
+        self.x[i * q..(i + 1) * q].copy_from_slice(to);
+        for (c, &v) in to.iter().enumerate() {
+            self.xt[c * n + i] = v;
         }
     }
 
@@ -194,18 +270,16 @@ impl<'a> IncrementalCost<'a> {
     /// factorisation of `K`; when `measure`, record the drift it corrects.
     fn factorise(&mut self, measure: bool) -> Result<()> {
         let n = self.n;
-        let kmat = Mat::from_fn(n, n, |i, j| self.k[j * n + i]);
-        let (logdet, inv) = factor(kmat.as_ref(), "refactorisation")?;
-        let fresh = to_vec(inv.as_ref());
-        let trace = dot(&fresh, &self.y);
+        let kmat = MatRef::from_column_major_slice(&self.k, n, n);
+        let (logdet, inv) = factor(kmat, "refactorisation")?;
+        let mut fresh = std::mem::take(&mut self.fresh);
+        copy_columns(&inv, &mut fresh);
+        // tr(K^-1 Y) for symmetric K^-1, Y: the sum of the elementwise product.
+        let trace = vdot(&fresh, &self.y);
         if measure {
             let old = self.cost();
             let new = 0.5 * self.d * logdet + 0.5 * trace;
-            let scale = fresh.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            let diff = fresh
-                .iter()
-                .zip(&self.m)
-                .fold(0.0f64, |a, (f, m)| a.max((f - m).abs()));
+            let (diff, scale) = max_diff_and_abs(&fresh, &self.m);
             let drift = (old - new).abs() / new.abs().max(1e-300);
             self.stats.max_cost_drift = self.stats.max_cost_drift.max(drift);
             self.stats.max_inverse_drift = self.stats.max_inverse_drift.max(diff / scale);
@@ -217,7 +291,8 @@ impl<'a> IncrementalCost<'a> {
                 self.interval = (self.interval * 2).min(self.max_interval);
             }
         }
-        self.m = fresh;
+        self.fresh = std::mem::replace(&mut self.m, fresh);
+        self.ym_of = None;
         self.logdet = logdet;
         self.trace = trace;
         self.since_refresh = 0;
@@ -273,22 +348,24 @@ impl<'a> IncrementalCost<'a> {
 
     /// Evaluate moving point `i` to `to` in O(N^2), without applying it.
     pub fn trial(&mut self, i: usize, to: &[f64]) -> Trial {
-        let (n, q) = (self.n, self.q);
+        let n = self.n;
         self.point.copy_from_slice(to);
-        for j in 0..n {
-            self.kcol[j] = if j == i {
-                1.0 + self.kernel.noise
-            } else {
-                self.kernel.eval(to, &self.x[j * q..(j + 1) * q])
-            };
-            self.u[j] = self.kcol[j] - self.k[i * n + j];
+        kernel_row(&self.xt, to, self.denom(), &mut self.kcol);
+        self.kcol[i] = 1.0 + self.kernel.noise;
+        for ((u, kc), k) in self.u.iter_mut().zip(&self.kcol).zip(&self.k[i * n..]) {
+            *u = kc - k;
         }
         self.u[i] = 0.0;
-        matvec(&self.m, n, &self.u, &mut self.p);
+        symv(&self.m, &self.u, &mut self.p);
         let m_i = &self.m[i * n..(i + 1) * n];
-        matvec(&self.y, n, &self.p, &mut self.yp);
-        matvec(&self.y, n, m_i, &mut self.ym);
-        let (umu, um, mii) = (dot(&self.u, &self.p), self.p[i], m_i[i]);
+        if self.ym_of == Some(i) {
+            symv(&self.y, &self.p, &mut self.yp);
+        } else {
+            symv2(&self.y, &self.p, m_i, &mut self.yp, &mut self.ym);
+            self.mym = vdot(m_i, &self.ym);
+            self.ym_of = Some(i);
+        }
+        let (umu, um, mii) = (vdot(&self.u, &self.p), self.p[i], m_i[i]);
         let a_ma = 0.5 * (umu + 2.0 * um + mii);
         let b_mb = 0.5 * (umu - 2.0 * um + mii);
         let a_mb = 0.5 * (umu - mii);
@@ -298,11 +375,7 @@ impl<'a> IncrementalCost<'a> {
         let r = std::f64::consts::FRAC_1_SQRT_2;
         let coef = a_mb / g1;
         let (alpha, beta) = (r * (1.0 - coef), -r * (1.0 + coef));
-        let (pyp, pym, mym) = (
-            dot(&self.p, &self.yp),
-            dot(&self.p, &self.ym),
-            dot(m_i, &self.ym),
-        );
+        let (pyp, pym, mym) = (vdot(&self.p, &self.yp), vdot(&self.p, &self.ym), self.mym);
         let v1yv1 = 0.5 * (pyp + 2.0 * pym + mym);
         let v2yv2 = alpha * alpha * pyp + 2.0 * alpha * beta * pym + beta * beta * mym;
         let dtrace = -v1yv1 / g1 + v2yv2 / g2;
@@ -311,16 +384,8 @@ impl<'a> IncrementalCost<'a> {
         if !(g2 > MIN_DENOMINATOR && g1.is_finite() && delta.is_finite()) {
             return self.dense_trial(i);
         }
-        for ((v1, v2), (p, m)) in self
-            .v1
-            .iter_mut()
-            .zip(self.v2.iter_mut())
-            .zip(self.p.iter().zip(m_i))
-        {
-            *v1 = r * (p + m);
-            *v2 = alpha * p + beta * m;
-        }
         (self.g1, self.g2, self.dtrace) = (g1, g2, dtrace);
+        (self.alpha, self.beta) = (alpha, beta);
         Trial {
             index: i,
             delta,
@@ -339,7 +404,9 @@ impl<'a> IncrementalCost<'a> {
         }
         let delta = match factor(kmat.as_ref(), "trial") {
             Ok((logdet, inv)) => {
-                let trace = dot(&to_vec(inv.as_ref()), &self.y);
+                let mut fresh = Vec::new();
+                copy_columns(&inv, &mut fresh);
+                let trace = vdot(&fresh, &self.y);
                 0.5 * self.d * logdet + 0.5 * trace - self.cost()
             }
             Err(_) => f64::INFINITY,
@@ -353,8 +420,10 @@ impl<'a> IncrementalCost<'a> {
 
     /// Apply the last trial (which must be the one given).
     pub fn accept(&mut self, t: Trial) -> Result<()> {
-        let (n, q, i) = (self.n, self.q, t.index);
-        self.x[i * q..(i + 1) * q].copy_from_slice(&self.point);
+        let (n, i) = (self.n, t.index);
+        let point = std::mem::take(&mut self.point);
+        self.set_point(i, &point);
+        self.point = point;
         for j in 0..n {
             self.k[i * n + j] = self.kcol[j];
             self.k[j * n + i] = self.kcol[j];
@@ -363,21 +432,21 @@ impl<'a> IncrementalCost<'a> {
             return self.factorise(false);
         }
         let (g1, g2) = (self.g1, self.g2);
-        for c in 0..n {
-            let (a, b) = (self.v1[c] / g1, self.v2[c] / g2);
-            let col = &mut self.m[c * n..(c + 1) * n];
-            for ((m, v1), v2) in col.iter_mut().zip(&self.v1).zip(&self.v2) {
-                *m += v2 * b - v1 * a;
-            }
+        // s1 = K^-1 a / sqrt g1 = (p + m_i) / sqrt(2 g1);  s2 = K1^-1 b / sqrt g2.
+        let c1 = std::f64::consts::FRAC_1_SQRT_2 / g1.sqrt();
+        let (a2, b2) = (self.alpha / g2.sqrt(), self.beta / g2.sqrt());
+        let m_i = &self.m[i * n..(i + 1) * n];
+        for ((s1, s2), (p, m)) in self
+            .v1
+            .iter_mut()
+            .zip(self.v2.iter_mut())
+            .zip(self.p.iter().zip(m_i))
+        {
+            *s1 = c1 * (p + m);
+            *s2 = a2 * p + b2 * m;
         }
-        // Exact symmetry (the two products above round alike, but be explicit).
-        for c in 0..n {
-            for r in 0..c {
-                let v = 0.5 * (self.m[c * n + r] + self.m[r * n + c]);
-                self.m[c * n + r] = v;
-                self.m[r * n + c] = v;
-            }
-        }
+        rank2_update(&mut self.m, &self.v1, &self.v2);
+        self.ym_of = None;
         self.logdet += g1.ln() + g2.ln();
         self.trace += self.dtrace;
         self.stats.updates += 1;
@@ -390,10 +459,12 @@ impl<'a> IncrementalCost<'a> {
 
     /// Replace all points (a pattern move), refactorising from scratch.
     pub fn set_all(&mut self, x: MatRef<'_, f64>) -> Result<()> {
+        let mut point = vec![0.0; self.q];
         for i in 0..self.n {
-            for c in 0..self.q {
-                self.x[i * self.q + c] = x[(i, c)];
+            for (c, v) in point.iter_mut().enumerate() {
+                *v = x[(i, c)];
             }
+            self.set_point(i, &point);
         }
         self.fill_kernel();
         self.factorise(false)
@@ -472,6 +543,41 @@ mod tests {
         let st = s.stats();
         assert_eq!(st.updates + st.dense_fallbacks, 100_000);
         assert!(st.refreshes > 1000, "{st:?}");
+    }
+
+    /// Trials that are not applied, several in a row on the same point (where
+    /// `Y K^-1 e_i` is reused) and on others, each against a dense
+    /// recomputation; `K^-1` stays exactly symmetric through the updates.
+    #[test]
+    fn rejected_and_repeated_trials_match_dense_recomputation() {
+        let (data, x) = problem(30, 200, 5);
+        let kernel = Kernel::default();
+        let mut s = IncrementalCost::new(kernel, &data, x.as_ref(), 64).unwrap();
+        let mut rng = SplitMix64::new(3);
+        let mut reused = 0;
+        for k in 0..3000 {
+            let i = (rng.next_u64() % 3) as usize;
+            reused += usize::from(s.ym_of == Some(i));
+            let mut to = s.point(i).to_vec();
+            let c = (rng.next_u64() % 2) as usize;
+            to[c] = (to[c] + rng.range(-0.3, 0.3)).clamp(-1.0, 1.0);
+            let t = s.trial(i, &to);
+            let mut x2 = s.latent();
+            x2[(i, 0)] = to[0];
+            x2[(i, 1)] = to[1];
+            let want = cost(&kernel, &data, x2.as_ref()).unwrap();
+            assert!(
+                (s.cost() + t.delta - want).abs() <= 1e-9 * want.abs(),
+                "trial {k}: {} vs {want}",
+                s.cost() + t.delta
+            );
+            if rng.next_u64() % 3 == 0 {
+                s.accept(t).unwrap();
+                let m = s.inverse();
+                assert!((0..30).all(|r| (0..30).all(|c| m[(r, c)] == m[(c, r)])));
+            }
+        }
+        assert!(reused > 400, "{reused}");
     }
 
     #[test]

@@ -27,6 +27,7 @@ pub mod pca;
 pub mod reconstruct;
 pub mod render;
 pub mod store;
+pub mod symmetric;
 pub mod transform;
 
 pub use error::{CoreError, NoProgress, Progress, Result};
