@@ -14,12 +14,14 @@
 //!    `K'` is positive definite.
 //!
 //! The trace term follows from the same vectors:
-//! `tr(K'^-1 Y) = tr(K^-1 Y) - v1^T Y v1 / g1 + v2^T Y v2 / g2`. All of it
-//! needs three matrix-vector products (`p = K^-1 u`, `Y p`, `Y K^-1 e_i`),
-//! the last of which depends only on `i` and the state: it is kept from one
-//! trial of point `i` to the next until a move is applied, so a trial costs
-//! two products of [`crate::symmetric`] (about two thirds of the trials reuse
-//! it). An applied move updates `K^-1` by `s2 s2^T - s1 s1^T` with
+//! `tr(K'^-1 Y) = tr(K^-1 Y) - v1^T Y v1 / g1 + v2^T Y v2 / g2`, where
+//! `v1`, `v2` combine `p = K^-1 u` and `m_i = K^-1 e_i`: all of it needs
+//! `p` (a matrix-vector product), the quadratic form `p^T Y p` (half the
+//! arithmetic of a product) and `Y m_i`, which depends only on `i` and the
+//! state: the first trial of point `i` after a change computes it, the
+//! following trials of the point reuse it. These kernels are in
+//! [`crate::symmetric`] (AVX2 where present, the same bits as the portable
+//! path). An applied move updates `K^-1` by `s2 s2^T - s1 s1^T` with
 //! `s_k = v_k / sqrt g_k`, which keeps it exactly symmetric. The kernel row of
 //! a trial is one vectorised loop ([`crate::fastexp`]; the whole `K` of the
 //! state is built with the same `exp`, so its rows and a fresh `K` agree).
@@ -34,12 +36,14 @@
 //! `K` lose about `cond(K) eps` a move and refactorise often; the small steps
 //! of a converging search refactorise rarely.
 
-use faer::{Mat, MatRef};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt;
+use faer::{Mat, MatRef, Par};
 
-use crate::error::Result;
+use crate::error::{CoreError, Result};
 use crate::kernel::Kernel;
 use crate::likelihood::{GramData, factor};
-use crate::symmetric::{rank2_update, symv, symv2};
+use crate::symmetric::{quadform, rank2_update, symv};
 
 /// Relative cost drift allowed between refactorisations; the refresh interval adapts to keep under it.
 const TARGET_DRIFT: f64 = 1e-10;
@@ -96,6 +100,7 @@ pub struct IncrementalCost<'a> {
     m: Vec<f64>,
     // The buffer of the next refactorisation's `K^-1`.
     fresh: Vec<f64>,
+    factoriser: Factoriser,
     logdet: f64,
     trace: f64,
     max_interval: u64,
@@ -127,6 +132,62 @@ fn vdot(a: &[f64], b: &[f64]) -> f64 {
     crate::dot::dot(a, b)
 }
 
+/// [`factor`]'s Cholesky and inverse (the same calls, so the same bits)
+/// into buffers kept from one refactorisation to the next, the inverse
+/// mirrored within the state's own layout.
+struct Factoriser {
+    l: Mat<f64>,
+    inv: Mat<f64>,
+    mem: MemBuffer,
+}
+
+impl Factoriser {
+    fn new(n: usize) -> Factoriser {
+        Factoriser {
+            l: Mat::zeros(n, n),
+            inv: Mat::zeros(n, n),
+            mem: MemBuffer::new(
+                llt::factor::cholesky_in_place_scratch::<f64>(n, Par::Seq, Default::default())
+                    .or(llt::inverse::inverse_scratch::<f64>(n, Par::Seq)),
+            ),
+        }
+    }
+
+    /// `log|K|`, and `K^-1` into `out` (column-major, exactly symmetric);
+    /// `None` if `K` (column-major `n x n`) is not numerically positive definite.
+    fn inverse(&mut self, k: &[f64], out: &mut Vec<f64>) -> Option<f64> {
+        let n = self.l.nrows();
+        self.l.copy_from(MatRef::from_column_major_slice(k, n, n));
+        llt::factor::cholesky_in_place(
+            self.l.as_mut(),
+            Default::default(),
+            Par::Seq,
+            MemStack::new(&mut self.mem),
+            Default::default(),
+        )
+        .ok()?;
+        let logdet = 2.0 * (0..n).map(|i| self.l[(i, i)].ln()).sum::<f64>();
+        if !logdet.is_finite() {
+            return None;
+        }
+        // `inverse` reads the lower triangle of `l` and writes the lower triangle of `inv`.
+        llt::inverse::inverse(
+            self.inv.as_mut(),
+            self.l.as_ref(),
+            Par::Seq,
+            MemStack::new(&mut self.mem),
+        );
+        copy_columns(&self.inv, out);
+        for c in 1..n {
+            let (left, right) = out.split_at_mut(c * n);
+            for (r, v) in right[..c].iter_mut().enumerate() {
+                *v = left[r * n + c];
+            }
+        }
+        Some(logdet)
+    }
+}
+
 /// A square matrix column by column into `out`.
 fn copy_columns(m: &Mat<f64>, out: &mut Vec<f64>) {
     out.clear();
@@ -153,20 +214,20 @@ fn max_diff_and_abs(a: &[f64], b: &[f64]) -> (f64, f64) {
     (fold(diff), fold(abs))
 }
 
-/// `out[j] = exp(-|to - x_j|^2 / denom)` for the points `xt` stored
+/// `out[j] = exp(scale |to - x_j|^2)` for the points `xt` stored
 /// coordinate by coordinate (`to.len()` runs of `out.len()`); the squared
 /// distance is summed as [`Kernel::eval`] sums it.
-fn kernel_row(xt: &[f64], to: &[f64], denom: f64, out: &mut [f64]) {
+fn kernel_row(xt: &[f64], to: &[f64], scale: f64, out: &mut [f64]) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2 (checked just above).
-        return unsafe { kernel_row_avx2(xt, to, denom, out) };
+        return unsafe { kernel_row_avx2(xt, to, scale, out) };
     }
-    kernel_row_body(xt, to, denom, out)
+    kernel_row_body(xt, to, scale, out)
 }
 
 #[inline(always)]
-fn kernel_row_body(xt: &[f64], to: &[f64], denom: f64, out: &mut [f64]) {
+fn kernel_row_body(xt: &[f64], to: &[f64], scale: f64, out: &mut [f64]) {
     out.fill(0.0);
     for (&t, xc) in to.iter().zip(xt.chunks_exact(out.len())) {
         for (o, &x) in out.iter_mut().zip(xc) {
@@ -175,15 +236,15 @@ fn kernel_row_body(xt: &[f64], to: &[f64], denom: f64, out: &mut [f64]) {
         }
     }
     for o in out.iter_mut() {
-        *o = crate::fastexp::exp(-*o / denom);
+        *o = crate::fastexp::exp(*o * scale);
     }
 }
 
 /// [`kernel_row_body`] compiled for AVX2: the same operations four wide, the same bits.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn kernel_row_avx2(xt: &[f64], to: &[f64], denom: f64, out: &mut [f64]) {
-    kernel_row_body(xt, to, denom, out)
+fn kernel_row_avx2(xt: &[f64], to: &[f64], scale: f64, out: &mut [f64]) {
+    kernel_row_body(xt, to, scale, out)
 }
 
 impl<'a> IncrementalCost<'a> {
@@ -216,6 +277,7 @@ impl<'a> IncrementalCost<'a> {
             k: vec![0.0; n * n],
             m: vec![0.0; n * n],
             fresh: Vec::with_capacity(n * n),
+            factoriser: Factoriser::new(n),
             logdet: 0.0,
             trace: 0.0,
             max_interval: refresh_every.max(1),
@@ -244,15 +306,15 @@ impl<'a> IncrementalCost<'a> {
         Ok(s)
     }
 
-    /// `2 l^2`, as [`Kernel::eval`] forms it.
-    fn denom(&self) -> f64 {
-        2.0 * self.kernel.length_scale * self.kernel.length_scale
+    /// `-1 / (2 l^2)`: a kernel row multiplies by it rather than divide.
+    fn scale(&self) -> f64 {
+        -1.0 / (2.0 * self.kernel.length_scale * self.kernel.length_scale)
     }
 
     fn fill_kernel(&mut self) {
-        let (n, q, denom) = (self.n, self.q, self.denom());
+        let (n, q, scale) = (self.n, self.q, self.scale());
         for (i, col) in self.k.chunks_exact_mut(n).enumerate() {
-            kernel_row(&self.xt, &self.x[i * q..(i + 1) * q], denom, col);
+            kernel_row(&self.xt, &self.x[i * q..(i + 1) * q], scale, col);
             col[i] = 1.0 + self.kernel.noise;
         }
     }
@@ -269,11 +331,14 @@ impl<'a> IncrementalCost<'a> {
     /// Recompute `K^-1`, `log|K|` and the trace from a fresh Cholesky
     /// factorisation of `K`; when `measure`, record the drift it corrects.
     fn factorise(&mut self, measure: bool) -> Result<()> {
-        let n = self.n;
-        let kmat = MatRef::from_column_major_slice(&self.k, n, n);
-        let (logdet, inv) = factor(kmat, "refactorisation")?;
         let mut fresh = std::mem::take(&mut self.fresh);
-        copy_columns(&inv, &mut fresh);
+        let logdet = self.factoriser.inverse(&self.k, &mut fresh);
+        let Some(logdet) = logdet else {
+            self.fresh = fresh;
+            return Err(CoreError::NotPositiveDefinite {
+                context: "refactorisation".into(),
+            });
+        };
         // tr(K^-1 Y) for symmetric K^-1, Y: the sum of the elementwise product.
         let trace = vdot(&fresh, &self.y);
         if measure {
@@ -350,7 +415,7 @@ impl<'a> IncrementalCost<'a> {
     pub fn trial(&mut self, i: usize, to: &[f64]) -> Trial {
         let n = self.n;
         self.point.copy_from_slice(to);
-        kernel_row(&self.xt, to, self.denom(), &mut self.kcol);
+        kernel_row(&self.xt, to, self.scale(), &mut self.kcol);
         self.kcol[i] = 1.0 + self.kernel.noise;
         for ((u, kc), k) in self.u.iter_mut().zip(&self.kcol).zip(&self.k[i * n..]) {
             *u = kc - k;
@@ -358,13 +423,12 @@ impl<'a> IncrementalCost<'a> {
         self.u[i] = 0.0;
         symv(&self.m, &self.u, &mut self.p);
         let m_i = &self.m[i * n..(i + 1) * n];
-        if self.ym_of == Some(i) {
-            symv(&self.y, &self.p, &mut self.yp);
-        } else {
-            symv2(&self.y, &self.p, m_i, &mut self.yp, &mut self.ym);
+        if self.ym_of != Some(i) {
+            symv(&self.y, m_i, &mut self.ym);
             self.mym = vdot(m_i, &self.ym);
             self.ym_of = Some(i);
         }
+        let pyp = quadform(&self.y, &self.p, &mut self.yp);
         let (umu, um, mii) = (vdot(&self.u, &self.p), self.p[i], m_i[i]);
         let a_ma = 0.5 * (umu + 2.0 * um + mii);
         let b_mb = 0.5 * (umu - 2.0 * um + mii);
@@ -375,7 +439,7 @@ impl<'a> IncrementalCost<'a> {
         let r = std::f64::consts::FRAC_1_SQRT_2;
         let coef = a_mb / g1;
         let (alpha, beta) = (r * (1.0 - coef), -r * (1.0 + coef));
-        let (pyp, pym, mym) = (vdot(&self.p, &self.yp), vdot(&self.p, &self.ym), self.mym);
+        let (pym, mym) = (vdot(&self.p, &self.ym), self.mym);
         let v1yv1 = 0.5 * (pyp + 2.0 * pym + mym);
         let v2yv2 = alpha * alpha * pyp + 2.0 * alpha * beta * pym + beta * beta * mym;
         let dtrace = -v1yv1 / g1 + v2yv2 / g2;

@@ -6,11 +6,12 @@
 //! with `x` (for symmetric `A`, column `r` is row `r`), each in four fixed
 //! lanes with a fixed reduction and the tail in order, no fused
 //! multiply-add. The AVX2 path (chosen at run time) holds one register of
-//! lanes per column and takes eight columns at a time against one vector,
-//! or four against two vectors, so each element of `x` is loaded once for
-//! several columns and the short sums (N is about 100) keep enough
-//! independent additions in flight; it performs the same operations in the
-//! same order as the portable path, so both give the same bits. The rank-two update is
+//! lanes per column and takes eight columns at a time, so each element of
+//! `x` is loaded once for eight columns and the short sums (N is about 100)
+//! keep enough independent additions in flight; it performs the same
+//! operations in the same order as the portable path, so both give the
+//! same bits. A quadratic form `x^T A x` reads only the block lower
+//! triangle, about half the arithmetic. The rank-two update is
 //! element by element, the same bits on every path too, and exactly
 //! symmetric: `a_rc` and `a_cr` get the same products.
 
@@ -26,19 +27,61 @@ pub fn symv(a: &[f64], x: &[f64], out: &mut [f64]) {
     symv_body(a, x, out)
 }
 
-/// [`symv`] of two vectors at once: `out1 = A x1`, `out2 = A x2`, the same
-/// bits as two calls.
-pub fn symv2(a: &[f64], x1: &[f64], x2: &[f64], out1: &mut [f64], out2: &mut [f64]) {
-    let n = x1.len();
-    let (a, x2) = (&a[..n * n], &x2[..n]);
-    let (out1, out2) = (&mut out1[..n], &mut out2[..n]);
+/// The quadratic form `x^T A x` of the symmetric `n x n` column-major `A`
+/// (`n = x.len()`) from its block lower triangle, about half the arithmetic
+/// of `x . (A x)`; `scratch` (`n` values) is overwritten.
+///
+/// The columns go in groups of eight, `G = [c0, g)`: for `c` in `G`,
+/// `d_c = x[G] . A[G, c]` (the diagonal block) and `b_c = x[g..] . A[g.., c]`
+/// (below it), each in the lanes of [`symv`]; the form is `x . s` with
+/// `s_c = d_c + 2 b_c`.
+pub fn quadform(a: &[f64], x: &[f64], scratch: &mut [f64]) -> f64 {
+    let n = x.len();
+    let (a, s) = (&a[..n * n], &mut scratch[..n]);
     #[cfg(target_arch = "x86_64")]
     if has_avx2() {
         // SAFETY: the CPU has AVX2 (checked just above).
-        return unsafe { symv2_avx2(a, x1, x2, out1, out2) };
+        return unsafe { quadform_avx2(a, x, s) };
     }
-    symv_body(a, x1, out1);
-    symv_body(a, x2, out2);
+    quadform_body(a, x, s)
+}
+
+const GROUP: usize = 8;
+
+fn quadform_body(a: &[f64], x: &[f64], s: &mut [f64]) -> f64 {
+    let n = x.len();
+    for (c, sc) in s.iter_mut().enumerate() {
+        let c0 = c / GROUP * GROUP;
+        let g = (c0 + GROUP).min(n);
+        let d = dot4(&x[c0..g], &a[c * n + c0..c * n + g]);
+        let b = dot4(&x[g..], &a[c * n + g..(c + 1) * n]);
+        *sc = d + 2.0 * b;
+    }
+    dot4(x, s)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn quadform_avx2(a: &[f64], x: &[f64], s: &mut [f64]) -> f64 {
+    let n = x.len();
+    let full = n / GROUP * GROUP;
+    for c0 in (0..full).step_by(GROUP) {
+        let g = c0 + GROUP;
+        let (mut d, mut b) = ([[0.0]; GROUP], [[0.0]; GROUP]);
+        dots_avx2(a, (n, c0, c0), [&x[c0..g]], &mut d);
+        dots_avx2(a, (n, c0, g), [&x[g..]], &mut b);
+        for ((sc, d), b) in s[c0..g].iter_mut().zip(d).zip(b) {
+            *sc = d[0] + 2.0 * b[0];
+        }
+    }
+    for (c, sc) in s.iter_mut().enumerate().skip(full) {
+        let mut d = [[0.0]];
+        dots_avx2(a, (n, c, full), [&x[full..]], &mut d);
+        *sc = d[0][0] + 2.0 * 0.0;
+    }
+    let mut r = [[0.0]];
+    dots_avx2(s, (n, 0, 0), [x], &mut r);
+    r[0][0]
 }
 
 /// `A += s2 s2^T - s1 s1^T` for the `n x n` column-major `A`
@@ -102,15 +145,16 @@ fn dot4(x: &[f64], col: &[f64]) -> f64 {
     s
 }
 
-/// [`dot4`] of `C` consecutive columns of `a` (from column `c0`, each
-/// `n = xs[v].len()` long) with `V` vectors, in AVX2 registers:
-/// `out[c][v] = a[c0 + c] . xs[v]`, the same operations in the same order.
+/// [`dot4`] of `C` consecutive column segments of `a` with `V` vectors of
+/// `n = xs[v].len()` values, in AVX2 registers: segment `c` is
+/// `a[(c0 + c) stride + r0..][..n]` and `out[c][v]` its product with
+/// `xs[v]`, the same operations in the same order as [`dot4`].
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
 fn dots_avx2<const C: usize, const V: usize>(
     a: &[f64],
-    c0: usize,
+    (stride, c0, r0): (usize, usize, usize),
     xs: [&[f64]; V],
     out: &mut [[f64; V]; C],
 ) {
@@ -119,34 +163,62 @@ fn dots_avx2<const C: usize, const V: usize>(
     for x in xs {
         assert_eq!(x.len(), n);
     }
-    let a = &a[c0 * n..(c0 + C) * n];
+    assert!(r0 + n <= stride && (c0 + C) * stride <= a.len());
+    let a = &a[c0 * stride + r0..];
     let split = n / 4 * 4;
     let mut acc = [[_mm256_setzero_pd(); V]; C];
     for k in (0..split).step_by(4) {
-        // SAFETY: k + 4 <= n, each vector holds n values and `a` holds C columns of n.
+        // SAFETY: k + 4 <= n, each vector holds n values and each segment
+        // c * stride + [0, n) lies inside `a` (asserted above).
         unsafe {
             let mut xv = [_mm256_setzero_pd(); V];
             for v in 0..V {
                 xv[v] = _mm256_loadu_pd(xs[v].as_ptr().add(k));
             }
             for (c, acc) in acc.iter_mut().enumerate() {
-                let av = _mm256_loadu_pd(a.as_ptr().add(c * n + k));
+                let av = _mm256_loadu_pd(a.as_ptr().add(c * stride + k));
                 for (acc, x) in acc.iter_mut().zip(&xv) {
                     *acc = _mm256_add_pd(*acc, _mm256_mul_pd(*x, av));
                 }
             }
         }
     }
-    for c in 0..C {
-        for v in 0..V {
+    // (l0 + l1) + (l2 + l3) of four columns at once: the horizontal sums
+    // give [a0 + a1, b0 + b1, a2 + a3, b2 + b3] and the same for c, d.
+    let mut sums = [[0.0f64; V]; C];
+    for v in 0..V {
+        let mut c = 0;
+        while c + 4 <= C {
+            let mut r = [0.0f64; 4];
+            // SAFETY: AVX2 by this function's contract; `r` holds 4 f64.
+            unsafe {
+                let ab = _mm256_hadd_pd(acc[c][v], acc[c + 1][v]);
+                let cd = _mm256_hadd_pd(acc[c + 2][v], acc[c + 3][v]);
+                let lo = _mm256_permute2f128_pd::<0x20>(ab, cd);
+                let hi = _mm256_permute2f128_pd::<0x31>(ab, cd);
+                _mm256_storeu_pd(r.as_mut_ptr(), _mm256_add_pd(lo, hi));
+            }
+            for (k, r) in r.into_iter().enumerate() {
+                sums[c + k][v] = r;
+            }
+            c += 4;
+        }
+        for (acc, sum) in acc[c..].iter().zip(&mut sums[c..]) {
             let mut l = [0.0f64; 4];
             // SAFETY: `l` holds 4 f64.
-            unsafe { _mm256_storeu_pd(l.as_mut_ptr(), acc[c][v]) };
-            let mut s = (l[0] + l[1]) + (l[2] + l[3]);
-            for (x, a) in xs[v][split..].iter().zip(&a[c * n + split..(c + 1) * n]) {
+            unsafe { _mm256_storeu_pd(l.as_mut_ptr(), acc[v]) };
+            sum[v] = (l[0] + l[1]) + (l[2] + l[3]);
+        }
+    }
+    for (c, (out, sums)) in out.iter_mut().zip(sums).enumerate() {
+        for (v, (o, mut s)) in out.iter_mut().zip(sums).enumerate() {
+            for (x, a) in xs[v][split..]
+                .iter()
+                .zip(&a[c * stride + split..c * stride + n])
+            {
                 s += x * a;
             }
-            out[c][v] = s;
+            *o = s;
         }
     }
 }
@@ -159,35 +231,15 @@ fn symv_avx2(a: &[f64], x: &[f64], out: &mut [f64]) {
     let full = n / C * C;
     for c0 in (0..full).step_by(C) {
         let mut r = [[0.0]; C];
-        dots_avx2(a, c0, [x], &mut r);
+        dots_avx2(a, (n, c0, 0), [x], &mut r);
         for (o, r) in out[c0..c0 + C].iter_mut().zip(r) {
             *o = r[0];
         }
     }
     for (c, o) in out.iter_mut().enumerate().skip(full) {
         let mut r = [[0.0]];
-        dots_avx2(a, c, [x], &mut r);
+        dots_avx2(a, (n, c, 0), [x], &mut r);
         *o = r[0][0];
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn symv2_avx2(a: &[f64], x1: &[f64], x2: &[f64], out1: &mut [f64], out2: &mut [f64]) {
-    const C: usize = 4;
-    let n = x1.len();
-    let full = n / C * C;
-    for c0 in (0..full).step_by(C) {
-        let mut r = [[0.0; 2]; C];
-        dots_avx2(a, c0, [x1, x2], &mut r);
-        for (j, r) in r.iter().enumerate() {
-            (out1[c0 + j], out2[c0 + j]) = (r[0], r[1]);
-        }
-    }
-    for c in full..n {
-        let mut r = [[0.0; 2]];
-        dots_avx2(a, c, [x1, x2], &mut r);
-        (out1[c], out2[c]) = (r[0][0], r[0][1]);
     }
 }
 
@@ -222,13 +274,29 @@ mod tests {
             symv(&a, &x, &mut o1);
             symv_body(&a, &x, &mut p1);
             assert_eq!(o1, p1, "n {n}");
-            symv2(&a, &x, &y, &mut o1, &mut o2);
+            symv(&a, &y, &mut o2);
             symv_body(&a, &y, &mut p2);
-            assert_eq!((&o1, &o2), (&p1, &p2), "n {n}");
+            assert_eq!(o2, p2, "n {n}");
             for r in 0..n {
                 let plain: f64 = (0..n).map(|c| a[c * n + r] * x[c]).sum();
                 assert!((p1[r] - plain).abs() <= 1e-14 * n as f64, "n {n} row {r}");
             }
+
+            let mut s = vec![0.0; n];
+            let q = quadform(&a, &x, &mut s);
+            assert_eq!(
+                q.to_bits(),
+                quadform_body(&a, &x, &mut s).to_bits(),
+                "n {n}"
+            );
+            let plain: f64 = (0..n)
+                .flat_map(|r| (0..n).map(move |c| (r, c)))
+                .map(|(r, c)| x[r] * a[c * n + r] * x[c])
+                .sum();
+            assert!(
+                (q - plain).abs() <= 1e-14 * (n * n) as f64,
+                "n {n}: {q} vs {plain}"
+            );
 
             let (mut u, mut w) = (a.clone(), a.clone());
             rank2_update(&mut u, &x, &y);
