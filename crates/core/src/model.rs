@@ -524,7 +524,13 @@ fn fit_staged(
         .map(|i| (0..y.ncols()).map(|j| y[(i, j)]).collect())
         .collect();
     let gram = GramData::new(y, store.rows())?;
-    let fit = options.params.fit(&gram, progress)?;
+    // The optimisation runs on one core: meanwhile the other drops the old
+    // store's cached pages (the file stays as it is until the new model is
+    // in place), so removing it at the end is quick.
+    let fit = std::thread::scope(|scope| {
+        scope.spawn(|| brdf_merl::atomic::evict_cached(store_path));
+        options.params.fit(&gram, progress)
+    })?;
     let optimise_time = t2.elapsed();
     let t3 = Instant::now();
     let store_name = store_path
