@@ -6,32 +6,18 @@
 //! or else 16 synthetic materials at 90 x 90 x 180. The models are fitted
 //! once before timing starts. Run with `cargo bench --bench atlas`.
 
+mod common;
+
 use std::hint::black_box;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use brdf_atlas_core::map::View;
 use brdf_atlas_core::model::{FitOptions, fit_dir};
 use brdf_atlas_core::{
     GplvmParams, GramData, Model, NoProgress, OptimizerKind, Precision, TransformKind,
 };
-use brdf_merl::synth::database;
-use brdf_merl::{Dims, angles::direction};
+use brdf_merl::angles::direction;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-
-fn data_dir(tmp: &Path) -> PathBuf {
-    if let Some(dir) = std::env::var_os("BRDF_ATLAS_NBRDF_DIR") {
-        return PathBuf::from(dir);
-    }
-    let dir = tmp.join("merl");
-    std::fs::create_dir_all(&dir).expect("temporary directory");
-    for m in database(16, 1) {
-        m.brdf
-            .table(Dims::MERL)
-            .write(dir.join(format!("{}.binary", m.name)))
-            .expect("write input");
-    }
-    dir
-}
 
 fn fit(data: &Path, out: &Path, transform: TransformKind) -> Model {
     let options = FitOptions {
@@ -45,7 +31,7 @@ fn fit(data: &Path, out: &Path, transform: TransformKind) -> Model {
 
 fn atlas(c: &mut Criterion) {
     let tmp = tempfile::tempdir().expect("temporary directory");
-    let data = data_dir(tmp.path());
+    let data = common::data_dir(tmp.path());
     let raw = fit(&data, &tmp.path().join("raw.atlas"), TransformKind::Raw);
     let log = fit(&data, &tmp.path().join("log.atlas"), TransformKind::Log);
 

@@ -10,34 +10,19 @@
 //! synthetic materials at 90 x 90 x 180. Page cache warm: every input has
 //! been read by the fit before timing. Run with `cargo bench --bench fit`.
 
+mod common;
+
 use std::hint::black_box;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Duration;
 
 use brdf_atlas_core::model::{FitOptions, fit_dir, store_path_for};
 use brdf_atlas_core::store::{Dataset, build_store};
 use brdf_atlas_core::{GplvmParams, GramData, NoProgress, Precision, TransformKind, heap};
-use brdf_merl::Dims;
-use brdf_merl::synth::database;
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
 
 #[global_allocator]
 static HEAP: heap::Counting = heap::Counting;
-
-fn data_dir(tmp: &Path) -> PathBuf {
-    if let Some(dir) = std::env::var_os("BRDF_ATLAS_NBRDF_DIR") {
-        return PathBuf::from(dir);
-    }
-    let dir = tmp.join("merl");
-    std::fs::create_dir_all(&dir).expect("temporary directory");
-    for m in database(16, 1) {
-        m.brdf
-            .table(Dims::MERL)
-            .write(dir.join(format!("{}.binary", m.name)))
-            .expect("write input");
-    }
-    dir
-}
 
 /// Remove a model and its store, so the next fit writes fresh files (a
 /// re-fit over old files also pays for freeing the old store's pages).
@@ -48,7 +33,7 @@ fn remove_outputs(model: &Path) {
 
 fn fit(c: &mut Criterion) {
     let tmp = tempfile::tempdir().expect("temporary directory");
-    let data = data_dir(tmp.path());
+    let data = common::data_dir(tmp.path());
     let model = tmp.path().join("bench.atlas");
     let options = FitOptions {
         params: GplvmParams::new(2).check().expect("defaults"),
