@@ -29,7 +29,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use brdf_merl::atomic::PendingFile;
-use brdf_merl::table::is_invalid;
+use brdf_merl::table::{is_invalid, is_non_finite};
 use brdf_merl::{Dims, MerlFile};
 use faer::linalg::matmul::triangular::{self as tri, BlockStructure};
 use faer::{Accum, Mat, MatRef, Par};
@@ -426,8 +426,8 @@ fn centre_bin_major<T: bytemuck::Pod>(
     }
 }
 
-/// [`centre_bin_major`] into f32: with AVX2, four rows of four materials at
-/// a time (subtract, round, 4 x 4 transpose in registers); the same
+/// [`centre_bin_major`] into f32: with AVX2, eight rows of four materials at
+/// a time (subtract, round, two 4 x 4 transposes in registers); the same
 /// operations as the scalar path, so the same bits.
 fn centre_bin_major_f32(block: &mut [f64], mean: &[f64], out: &mut [f32]) {
     #[cfg(target_arch = "x86_64")]
@@ -480,19 +480,25 @@ fn centre_bin_major_f32_avx2(block: &mut [f64], mean: &[f64], out: &mut [f32]) {
         }
         for i in n4..n {
             for r in r0..r0 + 8 {
-                let z = (block[i * rows + r] - mean[r]) as f32;
-                block[i * rows + r] = z as f64;
-                out[r * n + i] = z;
+                centre_one(block, mean, out, (r, i));
             }
         }
     }
     for r in rows8..rows {
         for i in 0..n {
-            let z = (block[i * rows + r] - mean[r]) as f32;
-            block[i * rows + r] = z as f64;
-            out[r * n + i] = z;
+            centre_one(block, mean, out, (r, i));
         }
     }
+}
+
+/// The scalar step of [`centre_bin_major_f32_avx2`]'s remainders: value
+/// `r` of material `i`.
+#[inline(always)]
+fn centre_one(block: &mut [f64], mean: &[f64], out: &mut [f32], (r, i): (usize, usize)) {
+    let (rows, n) = (mean.len(), block.len() / mean.len());
+    let z = (block[i * rows + r] - mean[r]) as f32;
+    block[i * rows + r] = z as f64;
+    out[r * n + i] = z;
 }
 
 /// A directory of MERL files, validated and sorted by name.
@@ -654,10 +660,9 @@ fn tally(raw: &[f64], col: &[f64], measured: &mut [f64], mean: &mut [f64]) -> bo
 
 #[inline(always)]
 fn tally_portable(raw: &[f64], col: &[f64], measured: &mut [f64], mean: &mut [f64]) -> bool {
-    const EXPONENT: u64 = 0x7ff0_0000_0000_0000;
     let mut non_finite = 0u64;
     for (((v, t), c), m) in raw.iter().zip(col).zip(measured).zip(mean) {
-        non_finite |= ((v.to_bits() & EXPONENT) == EXPONENT) as u64;
+        non_finite |= is_non_finite(*v) as u64;
         *c += if is_invalid(*v) { 0.0 } else { 1.0 };
         *m += t;
     }

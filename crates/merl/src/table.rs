@@ -45,6 +45,13 @@ pub fn is_lfs_pointer(bytes: &[u8]) -> bool {
     bytes.starts_with(b"version https://git-lfs")
 }
 
+/// Is `v` infinite or NaN? Branch-free on the bits, so loops that OR it
+/// over many values vectorise (the readers' validity scans).
+#[inline(always)]
+pub fn is_non_finite(v: f64) -> bool {
+    (v.to_bits() & EXPONENT) == EXPONENT
+}
+
 /// Does a raw value mark an unmeasured sample?
 #[inline]
 pub fn is_invalid(raw: f64) -> bool {
@@ -108,26 +115,18 @@ impl MerlFile {
     /// [`MerlFile::copy_raw`]) are finite; the error names the first one that
     /// is not, as [`MerlFile::open`] would.
     pub fn check_finite(&self, start: usize, values: &[f64]) -> Result<()> {
-        // Branch-free (vectorises): is any exponent field all ones?
-        let non_finite = values.iter().fold(0u64, |a, v| {
-            a | ((v.to_bits() & EXPONENT) == EXPONENT) as u64
-        });
+        let non_finite = values
+            .iter()
+            .fold(0u64, |a, v| a | is_non_finite(*v) as u64);
         if non_finite == 0 {
             return Ok(());
         }
-        let (k, &value) = values
-            .iter()
-            .enumerate()
-            .find(|(_, v)| !v.is_finite())
-            .expect("a non-finite value was seen");
-        let (index, bins) = (start + k, self.dims.bins());
-        Err(MerlError::NonFinite {
-            path: self.path.clone(),
-            index,
-            channel: CHANNELS[index / bins],
-            bin: index % bins,
-            value,
-        })
+        Err(first_non_finite(
+            &self.path,
+            self.dims.bins(),
+            start,
+            values.iter().copied(),
+        ))
     }
 
     /// The file this was read from.
@@ -230,22 +229,18 @@ fn scan_values(path: &Path, data: &[u8]) -> Result<[usize; 3]> {
         for b in block.chunks_exact(8) {
             let bits = u64::from_le_bytes(b.try_into().expect("8 bytes"));
             negative += is_invalid(f64::from_bits(bits)) as usize;
-            non_finite |= ((bits & EXPONENT) == EXPONENT) as u64;
+            non_finite |= is_non_finite(f64::from_bits(bits)) as u64;
         }
         if non_finite != 0 {
-            let (k, v) = block
+            let values = block
                 .chunks_exact(8)
-                .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")))
-                .enumerate()
-                .find(|(_, v)| !v.is_finite())
-                .expect("a non-finite value was seen");
-            return Err(MerlError::NonFinite {
-                path: path.to_path_buf(),
-                index: channel * per_channel + k,
-                channel: CHANNELS[channel],
-                bin: k,
-                value: v,
-            });
+                .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")));
+            return Err(first_non_finite(
+                path,
+                per_channel,
+                channel * per_channel,
+                values,
+            ));
         }
         invalid[channel] = negative;
     }
@@ -254,6 +249,28 @@ fn scan_values(path: &Path, data: &[u8]) -> Result<[usize; 3]> {
 
 /// The exponent field of an f64: all ones for infinities and NaNs.
 const EXPONENT: u64 = 0x7ff0_0000_0000_0000;
+
+/// The error for the first non-finite value of `values`, which start at flat
+/// index `start` of a file with `bins` bins a channel (there must be one).
+fn first_non_finite(
+    path: &Path,
+    bins: usize,
+    start: usize,
+    values: impl Iterator<Item = f64>,
+) -> MerlError {
+    let (k, value) = values
+        .enumerate()
+        .find(|(_, v)| !v.is_finite())
+        .expect("a non-finite value was seen");
+    let index = start + k;
+    MerlError::NonFinite {
+        path: path.to_path_buf(),
+        index,
+        channel: CHANNELS[index / bins],
+        bin: index % bins,
+        value,
+    }
+}
 
 /// A MERL table in memory, values in raw file units.
 #[derive(Debug, Clone, PartialEq)]
