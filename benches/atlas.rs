@@ -11,8 +11,8 @@ mod common;
 use std::hint::black_box;
 use std::path::Path;
 
-use brdf_atlas_core::map::View;
-use brdf_atlas_core::model::{FitOptions, fit_dir};
+use brdf_atlas_core::View;
+use brdf_atlas_core::{FitOptions, fit_dir};
 use brdf_atlas_core::{
     GplvmParams, GramData, Model, NoProgress, OptimizerKind, Precision, TransformKind,
 };

@@ -16,8 +16,8 @@ use std::hint::black_box;
 use std::path::Path;
 use std::time::Duration;
 
-use brdf_atlas_core::model::{FitOptions, fit_dir, store_path_for};
-use brdf_atlas_core::store::{Dataset, build_store};
+use brdf_atlas_core::{Dataset, build_store};
+use brdf_atlas_core::{FitOptions, fit_dir, store_path_for};
 use brdf_atlas_core::{GplvmParams, GramData, NoProgress, Precision, TransformKind, heap};
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
 

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use brdf_atlas_core::map::View;
+use brdf_atlas_core::View;
 use brdf_merl::Vec3;
 
 use crate::error::Error;

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Duration;
 
-use brdf_atlas_core::model::{FitOptions, FitReport, fit_dir, store_path_for};
+use brdf_atlas_core::{FitOptions, FitReport, fit_dir, store_path_for};
 use brdf_atlas_core::{GplvmParams, OptimizerKind, Precision, Store, TransformKind};
 
 use crate::error::Error;

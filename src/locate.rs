@@ -4,8 +4,8 @@ use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+use brdf_atlas_core::Located;
 use brdf_atlas_core::Model;
-use brdf_atlas_core::locate::Located;
 use brdf_merl::MerlFile;
 
 use crate::coords::Point;

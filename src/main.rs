@@ -22,7 +22,7 @@ mod synth;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use brdf_atlas_core::map::View;
+use brdf_atlas_core::View;
 use brdf_atlas_core::{OptimizerKind, Precision, TransformKind};
 use brdf_merl::Dims;
 use clap::{Parser, Subcommand, ValueEnum};

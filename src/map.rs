@@ -8,8 +8,8 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use brdf_atlas_core::Model;
-use brdf_atlas_core::map::{AlbedoMethod, DEFAULT_SAMPLES, View};
 use brdf_atlas_core::render::{self, Picture};
+use brdf_atlas_core::{AlbedoMethod, DEFAULT_SAMPLES, View};
 use brdf_merl::atomic::commit_all;
 
 use crate::error::Error;

@@ -19,11 +19,11 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::{Duration, Instant, SystemTime};
 
+use brdf_atlas_core::ModelFile;
 use brdf_atlas_core::loo::{self, Evaluation};
-use brdf_atlas_core::map::{AlbedoMethod, DEFAULT_SAMPLES, View};
 use brdf_atlas_core::measure::{map_error, reference_albedo};
-use brdf_atlas_core::model::ModelFile;
-use brdf_atlas_core::store::{Dataset, build_store};
+use brdf_atlas_core::{AlbedoMethod, DEFAULT_SAMPLES, View};
+use brdf_atlas_core::{Dataset, build_store};
 use brdf_atlas_core::{
     Fit, GplvmParams, GramData, Model, OptimizerKind, Precision, Store, TransformKind,
 };

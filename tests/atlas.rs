@@ -6,8 +6,8 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
+use brdf_atlas_core::AlbedoMethod;
 use brdf_atlas_core::Model;
-use brdf_atlas_core::map::AlbedoMethod;
 use brdf_atlas_core::render::read_sidecar;
 use brdf_merl::{MerlFile, angles::direction};
 use common::{binaries, brdf_atlas, fit, point_after_at, synth, texts};

@@ -1,7 +1,7 @@
 //! Fit a directory of MERL files and print the phases' times:
 //! `cargo run --release -p brdf-atlas-core --example fit_dir -- DIR MODEL [raw|log] [hooke-jeeves|lbfgs]`.
 
-use brdf_atlas_core::model::{FitOptions, fit_dir};
+use brdf_atlas_core::{FitOptions, fit_dir};
 use brdf_atlas_core::{GplvmParams, NoProgress, OptimizerKind, Precision, TransformKind};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

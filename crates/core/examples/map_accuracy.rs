@@ -3,7 +3,7 @@
 //! the time of a 256 x 256 map.
 //! `cargo run --release -p brdf-atlas-core --example map_accuracy -- MODEL`.
 
-use brdf_atlas_core::map::View;
+use brdf_atlas_core::View;
 use brdf_atlas_core::measure::{map_error, reference_albedo};
 use brdf_atlas_core::{Model, NoProgress};
 use brdf_merl::Quadrature;
@@ -31,7 +31,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let t = std::time::Instant::now();
         let big = model.albedo_map(256, 256, view, Some(s), &NoProgress)?;
         let bins = match big.method {
-            brdf_atlas_core::map::AlbedoMethod::Quadrature { bins, .. } => bins,
+            brdf_atlas_core::AlbedoMethod::Quadrature { bins, .. } => bins,
             _ => 0,
         };
         println!(

@@ -1,7 +1,7 @@
 //! Render a model's albedo map:
 //! `cargo run --release -p brdf-atlas-core --example map_model -- MODEL OUT.png [SIZE] [SAMPLES]`.
 
-use brdf_atlas_core::map::View;
+use brdf_atlas_core::View;
 use brdf_atlas_core::render::{Picture, write_png};
 use brdf_atlas_core::{Model, NoProgress};
 

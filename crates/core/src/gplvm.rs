@@ -93,8 +93,12 @@ impl GplvmParams {
     pub fn check(self) -> Result<CheckedParams> {
         let bad = |m: String| Err(CoreError::InvalidParams(m));
         let k = self.kernel;
-        if self.q == 0 || self.q > 16 {
-            return bad(format!("q = {} must be between 1 and 16", self.q));
+        if self.q == 0 || self.q > crate::limits::MAX_Q {
+            return bad(format!(
+                "q = {} must be between 1 and {}",
+                self.q,
+                crate::limits::MAX_Q
+            ));
         }
         if let Err(why) = k.check() {
             return bad(why);

@@ -17,6 +17,7 @@ pub mod heap;
 pub mod incremental;
 pub mod kernel;
 pub mod likelihood;
+pub mod limits;
 pub mod locate;
 pub mod loo;
 pub mod map;
@@ -34,9 +35,14 @@ pub use error::{CoreError, NoProgress, Progress, Result};
 pub use gplvm::{CheckedParams, Fit, GplvmParams};
 pub use kernel::Kernel;
 pub use likelihood::GramData;
-pub use model::Model;
+pub use locate::Located;
+pub use map::{
+    AlbedoMap, AlbedoMethod, DEFAULT_SAMPLES, Segment, View, contour_levels, contours, luminance,
+};
+pub use model::{FitOptions, FitReport, Model, ModelFile, fit_dir, store_path_for};
 pub use optim::OptimizerKind;
-pub use store::{Precision, Store};
+pub use reconstruct::Blend;
+pub use store::{Dataset, Precision, Store, build_store};
 pub use transform::TransformKind;
 
 // The unit tests run under the counting allocator, so `heap` is tested as a

@@ -64,11 +64,12 @@ pub struct View {
 impl Default for View {
     /// The box `[-1, 1]^2` plus a 10% margin.
     fn default() -> Self {
+        let h = crate::limits::DEFAULT_VIEW_HALF_WIDTH;
         View {
-            x0: -1.1,
-            x1: 1.1,
-            y0: -1.1,
-            y1: 1.1,
+            x0: -h,
+            x1: h,
+            y0: -h,
+            y1: h,
         }
     }
 }
@@ -251,9 +252,10 @@ impl Model {
                 self.q()
             )));
         }
-        if width == 0 || height == 0 || width > 16384 || height > 16384 {
+        let max = crate::limits::MAX_MAP_SIDE;
+        if width == 0 || height == 0 || width > max || height > max {
             return Err(CoreError::BadQuery(format!(
-                "map size {width}x{height} must be between 1 and 16384 a side"
+                "map size {width}x{height} must be between 1 and {max} a side"
             )));
         }
         view.check()?;

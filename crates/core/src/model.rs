@@ -171,13 +171,7 @@ pub fn store_path_for(model: &Path) -> PathBuf {
     PathBuf::from(s)
 }
 
-/// Largest latent coordinate a model file may hold: a fit keeps its points
-/// in `[-1, 1]^q`; far beyond, the kernel is 0 between any two points.
-pub const LATENT_LIMIT: f64 = 1e3;
-/// Largest latent dimension (as [`crate::GplvmParams::check`] allows).
-pub const MAX_Q: usize = 16;
-/// Largest number of materials of a model (as a store allows).
-pub const MAX_MATERIALS: usize = 1 << 20;
+pub use crate::limits::{LATENT_LIMIT, MAX_MATERIALS, MAX_Q};
 
 impl ModelFile {
     /// Parse and check the JSON of a model file without touching its store:

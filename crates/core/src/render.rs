@@ -299,7 +299,7 @@ pub fn stage_sidecar(path: &Path, sidecar: &Sidecar) -> Result<PendingFile> {
 /// The sidecar format version this build writes and reads.
 pub const SIDECAR_VERSION: u32 = 1;
 /// Largest width or height a sidecar may give.
-pub const MAX_SIDE: usize = 1 << 16;
+pub const MAX_SIDE: usize = crate::limits::MAX_SIDECAR_SIDE;
 
 /// Read and check a sidecar.
 pub fn read_sidecar(path: &Path) -> Result<Sidecar> {

@@ -2,7 +2,7 @@
 //! itself (the BRDF Explorer plugin): the same levels and marching squares as
 //! the PNG maps of `brdf-atlas map`.
 
-use brdf_atlas_core::map::{AlbedoMap, AlbedoMethod, View, contour_levels, contours};
+use brdf_atlas_core::{AlbedoMap, AlbedoMethod, View, contour_levels, contours};
 
 use crate::check;
 use crate::status::{BrdfAtlasStatus, Failure, Result, run};

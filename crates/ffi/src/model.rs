@@ -3,7 +3,7 @@
 use std::ffi::c_char;
 
 use brdf_atlas_core::Model;
-use brdf_atlas_core::map::View;
+use brdf_atlas_core::View;
 
 use crate::check;
 use crate::status::{BrdfAtlasStatus, Failure, run};

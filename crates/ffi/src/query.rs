@@ -3,7 +3,7 @@
 
 use std::ffi::c_char;
 
-use brdf_atlas_core::map::{DEFAULT_SAMPLES, View};
+use brdf_atlas_core::{DEFAULT_SAMPLES, View};
 use brdf_atlas_core::{Model, NoProgress};
 use brdf_merl::{MerlFile, Vec3};
 
@@ -108,7 +108,7 @@ pub unsafe extern "C" fn brdf_atlas_model_reconstruct_to_file(
 }
 
 /// RGB reflectance of one direction pair, or NaN.
-fn eval_one(blend: &brdf_atlas_core::reconstruct::Blend<'_>, wi: &[f64], wo: &[f64]) -> [f64; 3] {
+fn eval_one(blend: &brdf_atlas_core::Blend<'_>, wi: &[f64], wo: &[f64]) -> [f64; 3] {
     let v = |s: &[f64]| -> Vec3 { [s[0], s[1], s[2]] };
     blend.eval(v(wi), v(wo)).unwrap_or([f64::NAN; 3])
 }

@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 use std::ptr::{null, null_mut};
 
 use brdf_atlas::*;
-use brdf_atlas_core::map::View;
-use brdf_atlas_core::model::{FitOptions, fit_dir};
+use brdf_atlas_core::View;
+use brdf_atlas_core::{FitOptions, fit_dir};
 use brdf_atlas_core::{GplvmParams, Model, NoProgress, Precision, TransformKind};
 use brdf_merl::Dims;
 use brdf_merl::synth::database;

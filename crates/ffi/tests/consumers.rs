@@ -20,8 +20,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;
 
-use brdf_atlas_core::map::{DEFAULT_SAMPLES, View};
-use brdf_atlas_core::model::{FitOptions, fit_dir, store_path_for};
+use brdf_atlas_core::{DEFAULT_SAMPLES, View};
+use brdf_atlas_core::{FitOptions, fit_dir, store_path_for};
 use brdf_atlas_core::{GplvmParams, Model, NoProgress, Precision, TransformKind};
 use brdf_atlas_hostile::{merl_cases, model_cases};
 use brdf_merl::angles::direction;

@@ -8,7 +8,7 @@
 
 use std::path::{Path, PathBuf};
 
-use brdf_atlas_core::model::store_path_for;
+use brdf_atlas_core::store_path_for;
 use brdf_atlas_hostile::{
     fuzz, merl_bytes, merl_cases, model_cases, sidecar_cases, small_model, small_sidecar,
 };

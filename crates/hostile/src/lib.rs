@@ -13,9 +13,9 @@ pub mod fuzz;
 
 use std::path::{Path, PathBuf};
 
-use brdf_atlas_core::map::View;
-use brdf_atlas_core::model::{FitOptions, fit_dir, store_path_for};
+use brdf_atlas_core::View;
 use brdf_atlas_core::render::{Picture, read_sidecar, write_sidecar};
+use brdf_atlas_core::{FitOptions, fit_dir, store_path_for};
 use brdf_atlas_core::{GplvmParams, Model, NoProgress, Precision, TransformKind};
 use brdf_merl::Dims;
 use brdf_merl::synth::database;
