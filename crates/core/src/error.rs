@@ -77,19 +77,3 @@ impl CoreError {
 
 /// Result with [`CoreError`].
 pub type Result<T, E = CoreError> = std::result::Result<T, E>;
-
-/// Reports progress of long work: `(done, total)` in the work's own units.
-/// Called from worker threads.
-pub trait Progress: Sync {
-    /// Work `total` has begun under this `label`.
-    fn start(&self, _label: &str, _total: u64) {}
-    /// `delta` more units are done.
-    fn advance(&self, _delta: u64) {}
-    /// The work is finished.
-    fn finish(&self) {}
-}
-
-/// A [`Progress`] that shows nothing.
-pub struct NoProgress;
-
-impl Progress for NoProgress {}

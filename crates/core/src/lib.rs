@@ -1,49 +1,61 @@
 //! GPLVM latent spaces of measured BRDFs (Soler, Subr, Nowrouzezahrai 2018).
 //!
-//! The pipeline: a directory of MERL files becomes a [`store::Store`] (the
-//! transformed, centred data `Z`, bin-major, memory-mapped) and its Gram
-//! matrix `Y = Z Z^T` in one streaming pass; [`GplvmParams`] fits latent
-//! points to `Y` with Hooke-Jeeves ([`optim::HookeJeeves`], O(N^2) per trial
-//! through [`incremental::IncrementalCost`]) or L-BFGS; a [`model::Model`]
-//! file records the result beside its store.
+//! The modules follow the pipeline:
+//!
+//! - [`data`](self#data): a directory of MERL files ([`Dataset`]) becomes a
+//!   [`Store`] (the transformed, centred data `Z`, bin-major,
+//!   memory-mapped) and its Gram matrix `Y = Z Z^T`, in one streaming pass;
+//! - `gplvm`: [`GplvmParams`] fits latent points to `Y`, from a PCA start,
+//!   with Hooke-Jeeves (O(N^2) per trial through Sherman-Morrison and
+//!   determinant-lemma updates) or L-BFGS;
+//! - `model`: a [`Model`] is the fitted latent space beside its store, as a
+//!   versioned file ([`ModelFile`]) or in memory; [`fit_dir`] runs the
+//!   whole pipeline;
+//! - `query`: what a model answers: a material at a latent point
+//!   ([`Blend`]), where a new material lands ([`Located`]), albedo maps
+//!   ([`AlbedoMap`]), their contours and pictures ([`render`]);
+//! - `eval`: leave-one-out errors ([`loo`]) and map accuracy ([`measure`]);
+//! - `simd`: the vectorised kernels the hot loops share (CPU features are
+//!   detected once).
+//!
+//! ```no_run
+//! use brdf_atlas_core::{Model, View};
+//!
+//! let model = Model::open("atlas.model")?;
+//! let material = model.at(&[0.3, -0.5])?;
+//! let table = material.table();
+//! let map = model.albedo_map(256, 256, View::default(), None, &brdf_atlas_core::NoProgress)?;
+//! # let _ = (table, map);
+//! # Ok::<(), brdf_atlas_core::CoreError>(())
+//! ```
 #![warn(missing_docs)]
 
-pub mod dot;
-pub mod error;
-pub mod fastexp;
-pub mod fastlog;
-pub mod gplvm;
+mod data;
+mod error;
+mod eval;
+mod gplvm;
 pub mod heap;
-pub mod incremental;
-pub mod kernel;
-pub mod likelihood;
 pub mod limits;
-pub mod locate;
-pub mod loo;
-pub mod map;
-pub mod measure;
-pub mod model;
-pub mod optim;
-pub mod pca;
-pub mod reconstruct;
-pub mod render;
-pub mod store;
-pub mod symmetric;
-pub mod transform;
+mod model;
+mod progress;
+mod query;
+mod simd;
 
-pub use error::{CoreError, NoProgress, Progress, Result};
-pub use gplvm::{CheckedParams, Fit, GplvmParams};
-pub use kernel::Kernel;
-pub use likelihood::GramData;
-pub use locate::Located;
-pub use map::{
-    AlbedoMap, AlbedoMethod, DEFAULT_SAMPLES, Segment, View, contour_levels, contours, luminance,
+pub use data::{Dataset, Precision, Rows, Store, TransformKind, build_store};
+pub use error::{CoreError, Result};
+pub use eval::{loo, measure};
+pub use gplvm::optim;
+pub use gplvm::{CheckedParams, DriftStats, Fit, GplvmParams, GramData, Kernel, OptimizerKind};
+pub use model::{
+    FitOptions, FitRecord, FitReport, Model, ModelFile, StoreRef, fit_dir, store_path_for,
 };
-pub use model::{FitOptions, FitReport, Model, ModelFile, fit_dir, store_path_for};
-pub use optim::OptimizerKind;
-pub use reconstruct::Blend;
-pub use store::{Dataset, Precision, Store, build_store};
-pub use transform::TransformKind;
+pub use progress::{NoProgress, Progress};
+pub use query::render;
+pub use query::{
+    AlbedoMap, AlbedoMethod, Blend, DEFAULT_SAMPLES, Located, Segment, View, contour_levels,
+    contours, luminance,
+};
+pub use simd::fastlog;
 
 // The unit tests run under the counting allocator, so `heap` is tested as a
 // binary uses it.

@@ -2,8 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use brdf_atlas_core::model::{FitOptions, fit_dir};
-use brdf_atlas_core::store::Rows;
+use brdf_atlas_core::{FitOptions, Rows, fit_dir};
 use brdf_atlas_core::{GplvmParams, Model, NoProgress, Precision, TransformKind};
 use brdf_merl::synth::{Analytic, database};
 use brdf_merl::{Dims, INVALID, MerlFile, MerlTable, Quadrature};
@@ -231,7 +230,7 @@ fn written_reconstruction_reads_back_with_the_merl_reader() {
 fn linear_map_equals_quadrature_of_the_reconstruction() {
     let tmp = tempfile::tempdir().unwrap();
     let m = Model::open(fit(tmp.path(), TransformKind::Raw, Precision::F64)).unwrap();
-    let view = brdf_atlas_core::map::View::default();
+    let view = brdf_atlas_core::View::default();
     let (w, h) = (16, 12);
     let map = m.albedo_map(w, h, view, None, &NoProgress).unwrap();
     let rule = Quadrature::dense(DIMS, 2);

@@ -12,8 +12,10 @@ use font8x8::UnicodeFonts;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result};
-use crate::map::{AlbedoMap, AlbedoMethod, Segment, View, contour_levels, contours, luminance};
 use crate::model::{LATENT_LIMIT, MAX_MATERIALS, Model};
+use crate::query::map::{
+    AlbedoMap, AlbedoMethod, Segment, View, contour_levels, contours, luminance,
+};
 
 /// An input material drawn on the map.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

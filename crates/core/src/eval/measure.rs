@@ -5,8 +5,8 @@
 use brdf_merl::Quadrature;
 
 use crate::error::Result;
-use crate::map::AlbedoMap;
 use crate::model::Model;
+use crate::query::map::AlbedoMap;
 
 /// Albedo of the reconstruction at `x`, integrated with `rule` over every
 /// bin it names (unmeasured bins count as 0). Slow: one full reconstruction.

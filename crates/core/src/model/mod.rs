@@ -1,7 +1,7 @@
 //! The model file: a fitted latent space beside its store.
 //!
 //! A model is two files: `NAME` (JSON, small, self-describing, versioned)
-//! and `NAME.store` (the data, see [`crate::store`]). The JSON names the
+//! and `NAME.store` (the data, see [`crate::data::store`]). The JSON names the
 //! store relative to itself and records its size and checksum, so a moved
 //! pair still opens and a changed store is refused. Both are written
 //! atomically.
@@ -15,15 +15,16 @@ use faer::linalg::solvers::Solve;
 use faer::{Mat, Side};
 use serde::{Deserialize, Serialize};
 
-use crate::error::{CoreError, Progress, Result};
+use crate::data::transform::{Transform, TransformKind};
+use crate::data::{Dataset, Precision, Store, build_store};
+use crate::error::{CoreError, Result};
+use crate::gplvm::incremental::DriftStats;
+use crate::gplvm::kernel::Kernel;
+use crate::gplvm::likelihood::GramData;
+use crate::gplvm::optim::OptimizerKind;
 use crate::gplvm::{CheckedParams, Fit};
-use crate::incremental::DriftStats;
-use crate::kernel::Kernel;
-use crate::likelihood::GramData;
-use crate::map::MapBasis;
-use crate::optim::OptimizerKind;
-use crate::store::{Dataset, Precision, Store, build_store};
-use crate::transform::{Transform, TransformKind};
+use crate::progress::Progress;
+use crate::query::map::MapBasis;
 
 /// The `format` field of every model file.
 pub const FORMAT: &str = "brdf-atlas-model";
@@ -585,8 +586,8 @@ fn fit_staged(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::error::NoProgress;
     use crate::gplvm::GplvmParams;
+    use crate::progress::NoProgress;
 
     fn fitted(dir: &Path) -> PathBuf {
         let dims = Dims::new(6, 6, 12).unwrap();

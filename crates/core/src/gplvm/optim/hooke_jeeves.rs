@@ -16,9 +16,10 @@
 use faer::Mat;
 
 use super::{BOX, Optimizer, Outcome, Problem, in_box};
-use crate::error::{Progress, Result};
-use crate::incremental::IncrementalCost;
-use crate::likelihood::cost;
+use crate::error::Result;
+use crate::gplvm::incremental::IncrementalCost;
+use crate::gplvm::likelihood::cost;
+use crate::progress::Progress;
 
 /// Hooke-Jeeves settings.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -15,7 +15,7 @@ use faer::linalg::cholesky::llt;
 use faer::{Mat, MatRef, Par};
 
 use crate::error::{CoreError, Result};
-use crate::kernel::Kernel;
+use crate::gplvm::kernel::Kernel;
 
 /// The data of a fit: the normalised Gram matrix and the dimension `d`.
 #[derive(Debug, Clone)]

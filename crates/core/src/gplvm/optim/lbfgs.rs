@@ -10,9 +10,10 @@ use std::collections::VecDeque;
 use faer::Mat;
 
 use super::{BOX, Optimizer, Outcome, Problem};
-use crate::error::{Progress, Result};
-use crate::incremental::DriftStats;
-use crate::likelihood::cost_and_gradient;
+use crate::error::Result;
+use crate::gplvm::incremental::DriftStats;
+use crate::gplvm::likelihood::cost_and_gradient;
+use crate::progress::Progress;
 
 /// L-BFGS settings.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -114,16 +114,11 @@ unsafe fn rows_avx2<T: Element>(w: &[f64], z: &[T], mean: &[f64], out: &mut [f64
     }
 }
 
-#[cfg(target_arch = "x86_64")]
-fn has_avx2() -> bool {
-    std::arch::is_x86_feature_detected!("avx2")
-}
-
 /// `w . z[..w.len()]`, f64 accumulation.
 #[inline]
 pub fn dot<T: Element>(w: &[f64], z: &[T]) -> f64 {
     #[cfg(target_arch = "x86_64")]
-    if has_avx2() {
+    if super::has_avx2() {
         // SAFETY: the CPU has AVX2 (checked just above).
         return unsafe { dot_avx2(w, z) };
     }
@@ -136,7 +131,7 @@ pub fn rows<T: Element>(w: &[f64], z: &[T], mean: &[f64], out: &mut [f64]) {
     let (n, len) = (w.len(), out.len());
     let (z, mean) = (&z[..len * n], &mean[..len]);
     #[cfg(target_arch = "x86_64")]
-    if has_avx2() {
+    if super::has_avx2() {
         // SAFETY: the CPU has AVX2 (checked just above).
         return unsafe { rows_avx2(w, z, mean, out) };
     }
@@ -162,7 +157,7 @@ unsafe fn axpy_avx2<T: Element>(a: f64, z: &[T], acc: &mut [f64]) {
 pub fn axpy<T: Element>(a: f64, z: &[T], acc: &mut [f64]) {
     let z = &z[..acc.len()];
     #[cfg(target_arch = "x86_64")]
-    if has_avx2() {
+    if super::has_avx2() {
         // SAFETY: the CPU has AVX2 (checked just above).
         return unsafe { axpy_avx2(a, z, acc) };
     }

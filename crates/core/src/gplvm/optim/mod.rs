@@ -12,10 +12,11 @@ pub use lbfgs::Lbfgs;
 use faer::Mat;
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Progress, Result};
-use crate::incremental::DriftStats;
-use crate::kernel::Kernel;
-use crate::likelihood::GramData;
+use crate::error::Result;
+use crate::gplvm::incremental::DriftStats;
+use crate::gplvm::kernel::Kernel;
+use crate::gplvm::likelihood::GramData;
+use crate::progress::Progress;
 
 /// Lower and upper bound of every latent coordinate.
 pub const BOX: (f64, f64) = (-1.0, 1.0);

@@ -20,10 +20,10 @@
 //! arithmetic of a product) and `Y m_i`, which depends only on `i` and the
 //! state: the first trial of point `i` after a change computes it, the
 //! following trials of the point reuse it. These kernels are in
-//! [`crate::symmetric`] (AVX2 where present, the same bits as the portable
+//! [`crate::simd::symmetric`] (AVX2 where present, the same bits as the portable
 //! path). An applied move updates `K^-1` by `s2 s2^T - s1 s1^T` with
 //! `s_k = v_k / sqrt g_k`, which keeps it exactly symmetric. The kernel row of
-//! a trial is one vectorised loop ([`crate::fastexp`]; the whole `K` of the
+//! a trial is one vectorised loop ([`crate::simd::fastexp`]; the whole `K` of the
 //! state is built with the same `exp`, so its rows and a fresh `K` agree).
 //!
 //! `log|K|` is kept in log space (det K underflows: about 1e-400 for N = 100,
@@ -41,9 +41,9 @@ use faer::linalg::cholesky::llt;
 use faer::{Mat, MatRef, Par};
 
 use crate::error::{CoreError, Result};
-use crate::kernel::Kernel;
-use crate::likelihood::{GramData, factor};
-use crate::symmetric::{quadform, rank2_update, symv};
+use crate::gplvm::kernel::Kernel;
+use crate::gplvm::likelihood::{GramData, factor};
+use crate::simd::symmetric::{quadform, rank2_update, symv};
 
 /// Relative cost drift allowed between refactorisations; the refresh interval adapts to keep under it.
 const TARGET_DRIFT: f64 = 1e-10;
@@ -127,9 +127,9 @@ pub struct IncrementalCost<'a> {
     _data: std::marker::PhantomData<&'a GramData>,
 }
 
-/// The inner product of two state vectors (the lanes of [`crate::dot::dot`]).
+/// The inner product of two state vectors (the lanes of [`crate::simd::dot::dot`]).
 fn vdot(a: &[f64], b: &[f64]) -> f64 {
-    crate::dot::dot(a, b)
+    crate::simd::dot::dot(a, b)
 }
 
 /// [`factor`]'s Cholesky and inverse (the same calls, so the same bits)
@@ -219,7 +219,7 @@ fn max_diff_and_abs(a: &[f64], b: &[f64]) -> (f64, f64) {
 /// distance is summed as [`Kernel::eval`] sums it.
 fn kernel_row(xt: &[f64], to: &[f64], scale: f64, out: &mut [f64]) {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
+    if crate::simd::has_avx2() {
         // SAFETY: the CPU has AVX2 (checked just above).
         return unsafe { kernel_row_avx2(xt, to, scale, out) };
     }
@@ -236,7 +236,7 @@ fn kernel_row_body(xt: &[f64], to: &[f64], scale: f64, out: &mut [f64]) {
         }
     }
     for o in out.iter_mut() {
-        *o = crate::fastexp::exp(*o * scale);
+        *o = crate::simd::fastexp::exp(*o * scale);
     }
 }
 
@@ -375,11 +375,6 @@ impl<'a> IncrementalCost<'a> {
         0.5 * self.d * self.logdet + 0.5 * self.trace
     }
 
-    /// The current `log|K|`.
-    pub fn logdet(&self) -> f64 {
-        self.logdet
-    }
-
     /// Numerical health counters.
     pub fn stats(&self) -> DriftStats {
         self.stats
@@ -405,7 +400,8 @@ impl<'a> IncrementalCost<'a> {
         Mat::from_fn(self.n, self.q, |i, c| self.x[i * self.q + c])
     }
 
-    /// The current `K^-1` (incrementally maintained), for tests and diagnostics.
+    /// The current `K^-1` (incrementally maintained), for tests.
+    #[cfg(test)]
     pub fn inverse(&self) -> Mat<f64> {
         let n = self.n;
         Mat::from_fn(n, n, |i, j| self.m[j * n + i])
@@ -538,7 +534,7 @@ impl<'a> IncrementalCost<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::likelihood::cost;
+    use crate::gplvm::likelihood::cost;
     use brdf_merl::synth::SplitMix64;
 
     fn problem(n: usize, d: usize, seed: u64) -> (GramData, Mat<f64>) {
@@ -568,7 +564,7 @@ mod tests {
         );
         s.accept(t).unwrap();
         assert!((s.cost() - want).abs() <= 1e-9 * want.abs());
-        let fresh = crate::likelihood::factor(kernel.matrix(x2.as_ref()).as_ref(), "t")
+        let fresh = crate::gplvm::likelihood::factor(kernel.matrix(x2.as_ref()).as_ref(), "t")
             .unwrap()
             .1;
         let err = (&s.inverse() - &fresh).norm_max() / fresh.norm_max();

@@ -9,7 +9,7 @@
 //! bins again and again (every frame of a lit sphere does) pays the O(N)
 //! sum once per bin; the memo is a lazily allocated table of 8-byte slots
 //! that costs no memory until queries touch it. Every path goes through
-//! [`crate::dot`] and [`Transform::inverse_run`](crate::transform::Transform::inverse_run),
+//! [`crate::simd::dot`] and [`Transform::inverse_run`](crate::data::transform::Transform::inverse_run),
 //! so a point query and the same bin of a full table agree bit for bit.
 //!
 //! Outputs are reflectance clamped to `>= 0` (a weighted sum of BRDFs can go
@@ -22,10 +22,10 @@ use brdf_merl::table::raw_from_physical;
 use brdf_merl::{INVALID, MerlTable, Vec3};
 use rayon::prelude::*;
 
-use crate::dot;
+use crate::data::store::Rows;
 use crate::error::Result;
 use crate::model::Model;
-use crate::store::Rows;
+use crate::simd::dot;
 
 /// One latent point of a model, ready to answer queries.
 pub struct Blend<'m> {

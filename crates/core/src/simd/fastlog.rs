@@ -409,8 +409,7 @@ mod tests {
     /// AVX2 + FMA machines) that [`log1p_avx2`] gives the same bits.
     fn worst(xs: &[f64]) -> f64 {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
+        if crate::simd::has_avx2_fma() {
             use std::arch::x86_64::*;
             for v in xs.chunks_exact(4) {
                 let mut out = [0.0; 4];

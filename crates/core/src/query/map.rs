@@ -23,12 +23,13 @@ use faer::{Accum, Mat, Par};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::dot;
-use crate::error::{CoreError, Progress, Result};
-use crate::fastexp;
+use crate::data::store::Rows;
+use crate::data::transform::InverseForm;
+use crate::error::{CoreError, Result};
 use crate::model::Model;
-use crate::store::Rows;
-use crate::transform::InverseForm;
+use crate::progress::Progress;
+use crate::simd::dot;
+use crate::simd::fastexp;
 
 /// Quadrature samples per pixel when a map needs them (non-linear transforms)
 /// and the caller gives none; see the README's figures for what it buys.

@@ -10,7 +10,7 @@ use brdf_merl::Dims;
 use brdf_merl::table::{is_invalid, physical};
 use serde::{Deserialize, Serialize};
 
-use crate::fastlog;
+use crate::simd::fastlog;
 
 /// Which transform a store and model use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -183,8 +183,7 @@ impl Transform for CosineLog {
         let scale = physical(channel, 1.0);
         let cos = &self.cos[bin0..bin0 + raw.len()];
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
+        if crate::simd::has_avx2_fma() {
             // SAFETY: the CPU has AVX2 and FMA (checked just above).
             return unsafe { cosine_log_avx2(scale, raw, cos, out) };
         }

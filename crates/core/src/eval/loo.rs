@@ -35,12 +35,13 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef, Par, Side};
 use rayon::prelude::*;
 
-use crate::error::{CoreError, Progress, Result};
-use crate::fastlog::log1p;
-use crate::kernel::Kernel;
-use crate::likelihood::factor;
-use crate::store::{Rows, Store};
-use crate::transform::{InverseForm, Transform, TransformKind};
+use crate::data::store::{Rows, Store};
+use crate::data::transform::{InverseForm, Transform, TransformKind};
+use crate::error::{CoreError, Result};
+use crate::gplvm::kernel::Kernel;
+use crate::gplvm::likelihood::factor;
+use crate::progress::Progress;
+use crate::simd::fastlog::log1p;
 
 /// Rows of the store per block of the LOO pass.
 const BLOCK: usize = 1024;
@@ -356,7 +357,7 @@ fn score_block(
     row: &mut RowScratch,
 ) -> usize {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+    if crate::simd::has_avx2_fma() {
         // SAFETY: the CPU has AVX2 and FMA (checked just above).
         return unsafe { score_block_fma(s, r0, z, out, sums, row) };
     }
@@ -419,7 +420,7 @@ fn score_block_portable(
         match form {
             InverseForm::Exp(sc) => {
                 for ((f, l), &t) in truth {
-                    *f = sc * (crate::fastexp::exp(t) - 1.0).max(0.0);
+                    *f = sc * (crate::simd::fastexp::exp(t) - 1.0).max(0.0);
                     *l = t.max(0.0);
                 }
             }
@@ -445,7 +446,7 @@ fn score_block_portable(
                 InverseForm::Exp(sc) if s.log_space => {
                     for (((a, l), &p), (&f, &lv)) in values {
                         let t = m0 + p;
-                        let e = sc * (crate::fastexp::exp(t) - 1.0).max(0.0) - f;
+                        let e = sc * (crate::simd::fastexp::exp(t) - 1.0).max(0.0) - f;
                         let d = t.max(0.0) - lv;
                         *a += e * e;
                         *l += d * d;
@@ -453,7 +454,7 @@ fn score_block_portable(
                 }
                 InverseForm::Exp(sc) => {
                     for (((a, l), &p), (&f, &lv)) in values {
-                        let fp = sc * (crate::fastexp::exp(m0 + p) - 1.0).max(0.0);
+                        let fp = sc * (crate::simd::fastexp::exp(m0 + p) - 1.0).max(0.0);
                         let (e, d) = (fp - f, log1p(fp * c) - lv);
                         *a += e * e;
                         *l += d * d;
@@ -476,8 +477,8 @@ fn score_block_portable(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::error::NoProgress;
-    use crate::store::{Dataset, Precision, build_store};
+    use crate::data::{Dataset, Precision, build_store};
+    use crate::progress::NoProgress;
     use brdf_merl::synth::{SplitMix64, database};
     use faer::linalg::solvers::Solve;
 

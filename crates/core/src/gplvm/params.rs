@@ -13,11 +13,12 @@
 
 use faer::Mat;
 
-use crate::error::{CoreError, Progress, Result};
-use crate::kernel::Kernel;
-use crate::likelihood::GramData;
-use crate::optim::{HookeJeeves, Lbfgs, Optimizer, OptimizerKind, Outcome, Problem};
-use crate::pca::dual_pca;
+use crate::error::{CoreError, Result};
+use crate::gplvm::kernel::Kernel;
+use crate::gplvm::likelihood::GramData;
+use crate::gplvm::optim::{HookeJeeves, Lbfgs, Optimizer, OptimizerKind, Outcome, Problem};
+use crate::gplvm::pca::dual_pca;
+use crate::progress::Progress;
 
 /// GPLVM settings; `Default` gives the seed's (q = 2, l = 1, mu = 1e-4, Hooke-Jeeves).
 #[derive(Debug, Clone, PartialEq)]
@@ -171,8 +172,8 @@ impl CheckedParams {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::error::NoProgress;
-    use crate::likelihood::cost;
+    use crate::gplvm::likelihood::cost;
+    use crate::progress::NoProgress;
     use brdf_merl::synth::SplitMix64;
 
     /// Materials along a curve in a 30-dimensional space, plus noise.

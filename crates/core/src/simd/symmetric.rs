@@ -23,7 +23,7 @@ pub fn symv(a: &[f64], x: &[f64], out: &mut [f64]) {
     let n = x.len();
     let (a, out) = (&a[..n * n], &mut out[..n]);
     #[cfg(target_arch = "x86_64")]
-    if has_avx2_fma() {
+    if super::has_avx2_fma() {
         // SAFETY: the CPU has AVX2 and FMA (checked just above).
         return unsafe { symv_avx2(a, x, out) };
     }
@@ -42,7 +42,7 @@ pub fn quadform(a: &[f64], x: &[f64], scratch: &mut [f64]) -> f64 {
     let n = x.len();
     let (a, s) = (&a[..n * n], &mut scratch[..n]);
     #[cfg(target_arch = "x86_64")]
-    if has_avx2_fma() {
+    if super::has_avx2_fma() {
         // SAFETY: the CPU has AVX2 and FMA (checked just above).
         return unsafe { quadform_avx2(a, x, s) };
     }
@@ -94,21 +94,11 @@ pub fn rank2_update(a: &mut [f64], s1: &[f64], s2: &[f64]) {
     let n = s1.len();
     let (a, s2) = (&mut a[..n * n], &s2[..n]);
     #[cfg(target_arch = "x86_64")]
-    if has_avx2() {
+    if super::has_avx2() {
         // SAFETY: the CPU has AVX2 (checked just above).
         return unsafe { rank2_update_avx2(a, s1, s2) };
     }
     rank2_update_body(a, s1, s2)
-}
-
-#[cfg(target_arch = "x86_64")]
-fn has_avx2() -> bool {
-    std::arch::is_x86_feature_detected!("avx2")
-}
-
-#[cfg(target_arch = "x86_64")]
-fn has_avx2_fma() -> bool {
-    has_avx2() && std::arch::is_x86_feature_detected!("fma")
 }
 
 fn symv_body(a: &[f64], x: &[f64], out: &mut [f64]) {

@@ -9,12 +9,11 @@
 //! when `q > 2`), then Hooke-Jeeves refinement.
 
 use brdf_merl::MerlFile;
-use faer::Mat;
 use rayon::prelude::*;
 
 use crate::error::{CoreError, Result};
+use crate::gplvm::optim::BOX;
 use crate::model::Model;
-use crate::optim::BOX;
 
 /// Where a material lands.
 #[derive(Debug, Clone, PartialEq)]
@@ -144,12 +143,4 @@ impl Model {
             nearest,
         })
     }
-}
-
-/// Squared distances between the materials of a store (from its Gram matrix).
-pub fn data_distances(gram: &Mat<f64>) -> Mat<f64> {
-    let n = gram.nrows();
-    Mat::from_fn(n, n, |i, j| {
-        (gram[(i, i)] + gram[(j, j)] - 2.0 * gram[(i, j)]).max(0.0)
-    })
 }

@@ -1,0 +1,484 @@
+//! Building a store: one streaming pass over the input files that
+//! transforms, centres and writes `Z` block by block and accumulates the
+//! Gram matrix `Y = Z Z^T` on the way.
+
+use std::os::unix::fs::FileExt;
+use std::path::Path;
+use std::sync::Mutex;
+
+use brdf_merl::atomic::PendingFile;
+use brdf_merl::table::{is_invalid, is_non_finite};
+use faer::linalg::matmul::triangular::{self as tri, BlockStructure};
+use faer::{Accum, Mat, MatRef, Par};
+
+use crate::data::transform::TransformKind;
+use crate::error::{CoreError, Result};
+use crate::progress::Progress;
+use crate::simd::fold::{GROUPS, ordered_blocks};
+
+use super::{BLOCK_ROWS, Layout, Precision, Store};
+use crate::data::Dataset;
+
+/// Stream `rows` rows of `n` values through `fill(r0, buf)` in blocks of
+/// [`BLOCK_ROWS`] and accumulate `sum_j z_j z_j^T`. `fill` writes a block
+/// material by material: `buf[i * len + r]` is material `i` in row `r0 + r`,
+/// with `len = buf.len() / n` rows in the block. Blocks are grouped into
+/// [`GROUPS`] fixed ranges summed in order ([`ordered_blocks`]), so the result does not depend on
+/// how rayon schedules them.
+pub(super) fn gram_fold<S: Send>(
+    rows: usize,
+    n: usize,
+    progress: &dyn Progress,
+    scratch: impl Fn() -> S + Sync,
+    fill: impl Fn(&mut S, usize, &mut [f64]) + Sync,
+) -> Mat<f64> {
+    let partials = ordered_blocks(
+        rows,
+        BLOCK_ROWS,
+        GROUPS,
+        || {
+            (
+                Mat::<f64>::zeros(n, n),
+                vec![0.0f64; BLOCK_ROWS * n],
+                scratch(),
+            )
+        },
+        |(acc, buf, scratch), range| {
+            let len = range.len();
+            let buf = &mut buf[..len * n];
+            fill(scratch, range.start, buf);
+            // Material-major is column-major rows x n: Y += Z_b^T Z_b.
+            let zc = MatRef::from_column_major_slice(buf, len, n);
+            tri::matmul(
+                acc.as_mut(),
+                BlockStructure::TriangularLower,
+                Accum::Add,
+                zc.transpose(),
+                BlockStructure::Rectangular,
+                zc,
+                BlockStructure::Rectangular,
+                1.0,
+                Par::Seq,
+            );
+            progress.advance(len as u64);
+        },
+    );
+    let mut y = Mat::<f64>::zeros(n, n);
+    for (p, _, _) in &partials {
+        y += p;
+    }
+    // Only the lower triangle was accumulated (half the flops): mirror it.
+    for i in 0..n {
+        for j in 0..i {
+            y[(j, i)] = y[(i, j)];
+        }
+    }
+    y
+}
+
+/// Rows of a block centred and transposed together: one cache line of f64
+/// per material, so the `N` lines a tile reads stay in the L1 cache.
+const TILE_ROWS: usize = 8;
+
+/// Centre a material-major block (`n` columns of `mean.len()` rows) by the
+/// row means and round each value to the stored type (`to`, and `back` to
+/// f64, so the block then holds exactly what the file will); write it
+/// bin-major, little-endian, into `out` (`rows * n` values), ready to write.
+fn centre_bin_major<T: bytemuck::Pod>(
+    block: &mut [f64],
+    mean: &[f64],
+    out: &mut [T],
+    to: impl Fn(f64) -> T,
+    back: impl Fn(T) -> f64,
+) {
+    let rows = mean.len();
+    let n = block.len() / rows;
+    for t0 in (0..rows).step_by(TILE_ROWS) {
+        let t1 = (t0 + TILE_ROWS).min(rows);
+        let tile = &mut out[t0 * n..t1 * n];
+        for (col, material) in block.chunks_exact_mut(rows).enumerate() {
+            for ((v, m), dst) in material[t0..t1]
+                .iter_mut()
+                .zip(&mean[t0..t1])
+                .zip(tile[col..].iter_mut().step_by(n))
+            {
+                let z = to(*v - m);
+                *v = back(z);
+                *dst = z;
+            }
+        }
+    }
+    // The file is little-endian; on a big-endian host swap each value.
+    if cfg!(target_endian = "big") {
+        for word in bytemuck::cast_slice_mut::<T, u8>(out).chunks_exact_mut(size_of::<T>()) {
+            word.reverse();
+        }
+    }
+}
+
+/// [`centre_bin_major`] into f32: with AVX2, eight rows of four materials at
+/// a time (subtract, round, two 4 x 4 transposes in registers); the same
+/// operations as the scalar path, so the same bits.
+fn centre_bin_major_f32(block: &mut [f64], mean: &[f64], out: &mut [f32]) {
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::has_avx2() {
+        // SAFETY: the CPU has AVX2 (checked just above).
+        unsafe { centre_bin_major_f32_avx2(block, mean, out) };
+        return;
+    }
+    centre_bin_major(block, mean, out, |v| v as f32, |z| z as f64);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn centre_bin_major_f32_avx2(block: &mut [f64], mean: &[f64], out: &mut [f32]) {
+    use std::arch::x86_64::*;
+    let rows = mean.len();
+    let n = block.len() / rows;
+    assert!(out.len() == rows * n && block.len() == rows * n);
+    // Eight rows (one cache line of each material's run) by four materials.
+    let (rows8, n4) = (rows / 8 * 8, n / 4 * 4);
+    let (b, o) = (block.as_mut_ptr(), out.as_mut_ptr());
+    for r0 in (0..rows8).step_by(8) {
+        // SAFETY (all loads and stores below): r0 + 7 < rows and i + 3 < n,
+        // so every index is inside `block` (n runs of rows) or `out` (rows of n).
+        unsafe {
+            let m_lo = _mm256_loadu_pd(mean.as_ptr().add(r0));
+            let m_hi = _mm256_loadu_pd(mean.as_ptr().add(r0 + 4));
+            for i in (0..n4).step_by(4) {
+                let mut lo = [_mm_setzero_ps(); 4];
+                let mut hi = [_mm_setzero_ps(); 4];
+                for k in 0..4 {
+                    let p = b.add((i + k) * rows + r0);
+                    let z_lo = _mm256_cvtpd_ps(_mm256_sub_pd(_mm256_loadu_pd(p), m_lo));
+                    let z_hi = _mm256_cvtpd_ps(_mm256_sub_pd(_mm256_loadu_pd(p.add(4)), m_hi));
+                    _mm256_storeu_pd(p, _mm256_cvtps_pd(z_lo));
+                    _mm256_storeu_pd(p.add(4), _mm256_cvtps_pd(z_hi));
+                    lo[k] = z_lo;
+                    hi[k] = z_hi;
+                }
+                for (half, x) in [lo, hi].iter().enumerate() {
+                    let (t0, t1) = (_mm_unpacklo_ps(x[0], x[1]), _mm_unpacklo_ps(x[2], x[3]));
+                    let (t2, t3) = (_mm_unpackhi_ps(x[0], x[1]), _mm_unpackhi_ps(x[2], x[3]));
+                    let r = r0 + 4 * half;
+                    _mm_storeu_ps(o.add(r * n + i), _mm_movelh_ps(t0, t1));
+                    _mm_storeu_ps(o.add((r + 1) * n + i), _mm_movehl_ps(t1, t0));
+                    _mm_storeu_ps(o.add((r + 2) * n + i), _mm_movelh_ps(t2, t3));
+                    _mm_storeu_ps(o.add((r + 3) * n + i), _mm_movehl_ps(t3, t2));
+                }
+            }
+        }
+        for i in n4..n {
+            for r in r0..r0 + 8 {
+                centre_one(block, mean, out, (r, i));
+            }
+        }
+    }
+    for r in rows8..rows {
+        for i in 0..n {
+            centre_one(block, mean, out, (r, i));
+        }
+    }
+}
+
+/// The scalar step of [`centre_bin_major_f32_avx2`]'s remainders: value
+/// `r` of material `i`.
+#[inline(always)]
+fn centre_one(block: &mut [f64], mean: &[f64], out: &mut [f32], (r, i): (usize, usize)) {
+    let (rows, n) = (mean.len(), block.len() / mean.len());
+    let z = (block[i * rows + r] - mean[r]) as f32;
+    block[i * rows + r] = z as f64;
+    out[r * n + i] = z;
+}
+
+/// Per-thread buffers of the store pass, reused block after block.
+struct PassScratch {
+    raw: Vec<f64>,
+    mean: Vec<f64>,
+    /// Materials measured at each row of the block (a count, as f64 so the
+    /// tally vectorises).
+    measured: Vec<f64>,
+    unmeasured: Vec<u8>,
+    /// The block bin-major in the stored type (f64-sized to hold either).
+    out: Vec<f64>,
+    mean_bytes: Vec<u8>,
+}
+
+impl PassScratch {
+    fn new(n: usize) -> PassScratch {
+        PassScratch {
+            raw: Vec::with_capacity(BLOCK_ROWS),
+            mean: Vec::with_capacity(BLOCK_ROWS),
+            measured: Vec::with_capacity(BLOCK_ROWS),
+            unmeasured: Vec::with_capacity(BLOCK_ROWS),
+            out: vec![0.0; BLOCK_ROWS * n],
+            mean_bytes: Vec::with_capacity(8 * BLOCK_ROWS),
+        }
+    }
+
+    /// Ready for a block of `rows` rows.
+    fn start(&mut self, rows: usize) {
+        self.raw.resize(rows, 0.0);
+        self.mean.clear();
+        self.mean.resize(rows, 0.0);
+        self.measured.clear();
+        self.measured.resize(rows, 0.0);
+        self.unmeasured.resize(rows, 0);
+    }
+}
+
+/// One material's run in a block of the store pass: count its measured
+/// values into `measured`, add its transformed values `col` into `mean`,
+/// and say whether any raw value is not finite (the caller then finds and
+/// names it). One loop, vectorised (AVX2 where the CPU has it; the same
+/// bits either way: additions of the same values in the same order).
+fn tally(raw: &[f64], col: &[f64], measured: &mut [f64], mean: &mut [f64]) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::has_avx2() {
+        // SAFETY: the CPU has AVX2 (checked just above).
+        return unsafe { tally_avx2(raw, col, measured, mean) };
+    }
+    tally_portable(raw, col, measured, mean)
+}
+
+#[inline(always)]
+fn tally_portable(raw: &[f64], col: &[f64], measured: &mut [f64], mean: &mut [f64]) -> bool {
+    let mut non_finite = 0u64;
+    for (((v, t), c), m) in raw.iter().zip(col).zip(measured).zip(mean) {
+        non_finite |= is_non_finite(*v) as u64;
+        *c += if is_invalid(*v) { 0.0 } else { 1.0 };
+        *m += t;
+    }
+    non_finite != 0
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn tally_avx2(raw: &[f64], col: &[f64], measured: &mut [f64], mean: &mut [f64]) -> bool {
+    tally_portable(raw, col, measured, mean)
+}
+
+/// Build the store of a dataset at `out` (atomically) and return it with
+/// the Gram matrix `Y = Z Z^T` accumulated in the same pass.
+///
+/// One streaming pass: for each block of rows, read the `N` materials'
+/// values, transform, centre by the row mean, round to the stored precision,
+/// add the block's `Z_b Z_b^T` to `Y` (f64) and write the block in place.
+pub fn build_store(
+    data: &Dataset,
+    transform: TransformKind,
+    precision: Precision,
+    out: &Path,
+    progress: &dyn Progress,
+) -> Result<(Store, Mat<f64>)> {
+    let dims = data.dims();
+    let n = data.len();
+    let bins = dims.bins();
+    let layout = Layout::new(dims.values(), n, precision);
+    let pending = PendingFile::create(out).map_err(|e| CoreError::io(out, e))?;
+    let file = pending.file();
+    pending
+        .allocate(layout.len as u64)
+        .map_err(|e| CoreError::io(out, e))?;
+    let header = Layout::header(dims, n, precision, transform);
+    file.write_all_at(&header, 0)
+        .map_err(|e| CoreError::io(out, e))?;
+
+    let t = transform.build(dims);
+    // The first unreadable value in (material, value) order, whatever the
+    // schedule; and the first write error.
+    let bad_value: Mutex<Option<((usize, usize), CoreError)>> = Mutex::new(None);
+    let write_error: Mutex<Option<std::io::Error>> = Mutex::new(None);
+    // One writer at a time: concurrent writes to one file serialise on its
+    // inode lock in the kernel anyway, where the waiter spins.
+    let writing = Mutex::new(());
+    progress.start("store", layout.rows as u64);
+    let y = gram_fold(
+        layout.rows,
+        n,
+        progress,
+        || PassScratch::new(n),
+        |s, r0, buf| {
+            let rows = buf.len() / n;
+            s.start(rows);
+            // Transform each material's run of rows into its column of the block.
+            for (m, (f, col)) in data
+                .files
+                .iter()
+                .zip(buf.chunks_exact_mut(rows))
+                .enumerate()
+            {
+                f.copy_raw(r0, &mut s.raw);
+                t.forward_raw_rows(bins, r0, &s.raw, col);
+                if tally(&s.raw, col, &mut s.measured, &mut s.mean) {
+                    let e = f.check_finite(r0, &s.raw).expect_err("a non-finite value");
+                    let mut first = bad_value.lock().expect("no panics while locked");
+                    if first.as_ref().is_none_or(|(at, _)| (m, r0) < *at) {
+                        *first = Some(((m, r0), e.into()));
+                    }
+                }
+            }
+            for (u, c) in s.unmeasured.iter_mut().zip(&s.measured) {
+                *u = (*c == 0.0) as u8;
+            }
+            s.mean.iter_mut().for_each(|m| *m /= n as f64);
+            // Centre, round to the stored precision (the Gram matrix sees what
+            // the store holds), and lay the block out bin-major for the file.
+            let bytes: &[u8] = match precision {
+                Precision::F32 => {
+                    let out = &mut bytemuck::cast_slice_mut::<f64, f32>(&mut s.out)[..rows * n];
+                    centre_bin_major_f32(buf, &s.mean, out);
+                    bytemuck::cast_slice(out)
+                }
+                Precision::F64 => {
+                    let out = &mut s.out[..rows * n];
+                    centre_bin_major(buf, &s.mean, out, |v| v, |z| z);
+                    bytemuck::cast_slice(out)
+                }
+            };
+            s.mean_bytes.clear();
+            s.mean_bytes
+                .extend(s.mean.iter().flat_map(|m| m.to_le_bytes()));
+            let result = {
+                let _one_writer = writing.lock().expect("no panics while locked");
+                file.write_all_at(bytes, (layout.z + r0 * n * precision.bytes()) as u64)
+                    .and_then(|_| file.write_all_at(&s.mean_bytes, (layout.mean + 8 * r0) as u64))
+                    .and_then(|_| file.write_all_at(&s.unmeasured, (layout.unmeasured + r0) as u64))
+            };
+            if let Err(e) = result {
+                write_error
+                    .lock()
+                    .expect("no panics while locked")
+                    .get_or_insert(e);
+            }
+        },
+    );
+    progress.finish();
+    if let Some((_, e)) = bad_value.into_inner().expect("no panics while locked") {
+        return Err(e);
+    }
+    if let Some(e) = write_error.into_inner().expect("no panics while locked") {
+        return Err(CoreError::io(out, e));
+    }
+    pending.commit(false).map_err(|e| CoreError::io(out, e))?;
+    Ok((Store::open(out)?, y))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    use crate::data::synth_dir;
+    use crate::progress::NoProgress;
+    use brdf_merl::Dims;
+
+    #[test]
+    fn vector_centring_gives_the_scalar_bits() {
+        let mut rng = brdf_merl::synth::SplitMix64::new(3);
+        // Odd sizes exercise the remainders of the 4 x 4 tiles.
+        for (rows, n) in [(37, 10), (8, 4), (3, 3), (1024, 100)] {
+            let block: Vec<f64> = (0..rows * n).map(|_| rng.range(-5.0, 5.0) * 1e3).collect();
+            let mean: Vec<f64> = (0..rows).map(|_| rng.range(-1.0, 1.0)).collect();
+            let (mut a, mut b) = (block.clone(), block);
+            let (mut oa, mut ob) = (vec![0f32; rows * n], vec![0f32; rows * n]);
+            centre_bin_major_f32(&mut a, &mean, &mut oa);
+            centre_bin_major(&mut b, &mean, &mut ob, |v| v as f32, |z| z as f64);
+            assert_eq!(a, b);
+            assert_eq!(oa, ob);
+            // And the layout: value r of material i at out[r * n + i].
+            for (i, col) in a.chunks_exact(rows).enumerate() {
+                for (r, v) in col.iter().enumerate() {
+                    assert_eq!(oa[r * n + i] as f64, *v);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn store_holds_centred_transformed_values_and_gram() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dims = Dims::new(6, 6, 12).unwrap();
+        synth_dir(tmp.path(), 5, dims);
+        std::fs::write(tmp.path().join("notes.txt"), "hello").unwrap();
+        let data = Dataset::open_dir(tmp.path()).unwrap();
+        assert_eq!(data.len(), 5);
+        assert_eq!(data.ignored.len(), 1);
+        let tables: Vec<_> = data.files.iter().map(|f| f.to_table()).collect();
+        for transform in [TransformKind::Raw, TransformKind::Log] {
+            for precision in [Precision::F64, Precision::F32] {
+                let out =
+                    tmp.path()
+                        .join(format!("s-{}-{}.store", transform.name(), precision.name()));
+                let (store, y) =
+                    build_store(&data, transform, precision, &out, &NoProgress).unwrap();
+                assert_eq!(store.n(), 5);
+                let t = transform.build(dims);
+                // Dense reference: transform, centre, multiply.
+                let d = dims.values();
+                let mut z = Mat::<f64>::zeros(5, d);
+                for (i, tab) in tables.iter().enumerate() {
+                    for row in 0..d {
+                        let (c, bin) = (row / dims.bins(), row % dims.bins());
+                        z[(i, row)] = t.forward(bin, tab.value(c, bin));
+                    }
+                }
+                let tol = if precision == Precision::F32 {
+                    1e-6
+                } else {
+                    1e-12
+                };
+                for row in 0..d {
+                    let m: f64 = (0..5).map(|i| z[(i, row)]).sum::<f64>() / 5.0;
+                    assert!((store.mean()[row] - m).abs() <= 1e-12 * m.abs().max(1.0));
+                    let all_invalid = tables
+                        .iter()
+                        .all(|tab| tab.value(row / dims.bins(), row % dims.bins()).is_none());
+                    assert_eq!(store.unmeasured()[row] == 1, all_invalid);
+                    let mut got = vec![0.0; 5];
+                    store.copy_rows(row, &mut got);
+                    for i in 0..5 {
+                        z[(i, row)] -= m;
+                        assert!(
+                            (got[i] - z[(i, row)]).abs() <= tol * z[(i, row)].abs().max(1.0),
+                            "{row} {i}"
+                        );
+                    }
+                }
+                let dense = &z * z.transpose();
+                let scale = dense.norm_max();
+                assert!(
+                    (&y - &dense).norm_max() <= tol * scale * 10.0,
+                    "{:?}",
+                    (&y - &dense).norm_max()
+                );
+                // The stored-value Gram equals the one built in the same pass, bit for bit.
+                assert_eq!(store.gram(&NoProgress), y);
+            }
+        }
+    }
+
+    #[test]
+    fn gram_is_independent_of_thread_count() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dims = Dims::new(20, 20, 40).unwrap();
+        synth_dir(tmp.path(), 7, dims);
+        let data = Dataset::open_dir(tmp.path()).unwrap();
+        let (store, _) = build_store(
+            &data,
+            TransformKind::Raw,
+            Precision::F32,
+            &tmp.path().join("a.store"),
+            &NoProgress,
+        )
+        .unwrap();
+        let pool = |k| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(k)
+                .build()
+                .unwrap()
+        };
+        let one = pool(1).install(|| store.gram(&NoProgress));
+        let three = pool(3).install(|| store.gram(&NoProgress));
+        assert_eq!(one, three);
+    }
+}

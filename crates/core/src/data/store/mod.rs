@@ -1,0 +1,400 @@
+//! The store: the transformed, centred data matrix `Z`, bin-major and
+//! memory-mapped.
+//!
+//! `Z` has one row per table value (`d = 3 * bins` rows, channel-major like a
+//! MERL file) and one column per material. Row `j` holds the `N` values of
+//! value `j` for all materials, contiguous: a full reconstruction is one
+//! streaming pass (`out_j = mean_j + w . Z_j`), a point query touches one
+//! `N`-vector per value, and the Gram matrix `Y = Z Z^T = sum_j Z_j Z_j^T` is
+//! a chunked matrix product. The store is the only copy of `Z`: it is built
+//! by one pass over the input files, which also accumulates `Y`.
+//!
+//! File layout (little-endian):
+//! ```text
+//! 0   8  magic "BRDFSTOR"
+//! 8   4  version (1)
+//! 12  4  bytes per value (4 = f32, 8 = f64)
+//! 16  4  N, materials
+//! 20  4  transform (0 = raw, 1 = log)
+//! 24 12  dims (theta_h, theta_d, phi_d)
+//! 36 28  zero
+//! 64     mean: d f64, the per-value mean in transformed space
+//! ..     unmeasured: d bytes, 1 where no input material was measured
+//! ..     zero padding to a multiple of 64
+//! ..     Z: d rows of N values (f32 or f64)
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use brdf_merl::Dims;
+use faer::Mat;
+use memmap2::Mmap;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::data::transform::TransformKind;
+use crate::error::{CoreError, Result};
+use crate::progress::Progress;
+
+mod build;
+
+pub use build::build_store;
+use build::gram_fold;
+
+const MAGIC: &[u8; 8] = b"BRDFSTOR";
+const VERSION: u32 = 1;
+const HEADER: usize = 64;
+/// Rows per block of the streaming passes: 400 kB of f64 for N = 100, so a
+/// block of the store pass stays in the L2 cache between its steps.
+pub const BLOCK_ROWS: usize = 512;
+
+/// Precision of the stored values. Sums are always accumulated in f64.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Precision {
+    /// 4 bytes a value: half the memory and bandwidth, about 7 significant digits.
+    #[default]
+    F32,
+    /// 8 bytes a value.
+    F64,
+}
+
+impl Precision {
+    /// Bytes per value.
+    pub fn bytes(self) -> usize {
+        match self {
+            Precision::F32 => 4,
+            Precision::F64 => 8,
+        }
+    }
+
+    /// `f32` or `f64`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Precision::F32 => "f32",
+            Precision::F64 => "f64",
+        }
+    }
+
+    /// Parse `f32` or `f64`.
+    pub fn parse(s: &str) -> Option<Precision> {
+        match s {
+            "f32" => Some(Precision::F32),
+            "f64" => Some(Precision::F64),
+            _ => None,
+        }
+    }
+}
+
+/// Byte layout of a store with `n` materials over `rows` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Layout {
+    rows: usize,
+    n: usize,
+    bytes: usize,
+    mean: usize,
+    unmeasured: usize,
+    z: usize,
+    len: usize,
+}
+
+impl Layout {
+    /// The header of a store of `n` materials of `dims`.
+    fn header(
+        dims: Dims,
+        n: usize,
+        precision: Precision,
+        transform: TransformKind,
+    ) -> [u8; HEADER] {
+        let mut header = [0u8; HEADER];
+        header[..8].copy_from_slice(MAGIC);
+        let fields = [
+            VERSION,
+            precision.bytes() as u32,
+            n as u32,
+            transform as u32,
+        ];
+        let dimv = [dims.theta_h as u32, dims.theta_d as u32, dims.phi_d as u32];
+        for (k, v) in fields.iter().chain(&dimv).enumerate() {
+            header[8 + 4 * k..12 + 4 * k].copy_from_slice(&v.to_le_bytes());
+        }
+        header
+    }
+
+    fn new(rows: usize, n: usize, precision: Precision) -> Layout {
+        let mean = HEADER;
+        let unmeasured = mean + 8 * rows;
+        let z = (unmeasured + rows).div_ceil(64) * 64;
+        let bytes = precision.bytes();
+        Layout {
+            rows,
+            n,
+            bytes,
+            mean,
+            unmeasured,
+            z,
+            len: z + rows * n * bytes,
+        }
+    }
+}
+
+/// A memory-mapped store (see the module docs). Cheap to share by reference.
+pub struct Store {
+    path: PathBuf,
+    map: Mmap,
+    dims: Dims,
+    transform: TransformKind,
+    precision: Precision,
+    layout: Layout,
+}
+
+impl std::fmt::Debug for Store {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Store")
+            .field("path", &self.path)
+            .field("n", &self.layout.n)
+            .field("dims", &self.dims)
+            .field("transform", &self.transform)
+            .field("precision", &self.precision)
+            .finish()
+    }
+}
+
+/// Rows of the store, borrowed in their stored precision.
+#[derive(Clone, Copy)]
+pub enum Rows<'a> {
+    /// f32 values, `rows * n`.
+    F32(&'a [f32]),
+    /// f64 values, `rows * n`.
+    F64(&'a [f64]),
+}
+
+impl Store {
+    /// Map a store file and check its header and size.
+    pub fn open(path: impl AsRef<Path>) -> Result<Store> {
+        let path = path.as_ref().to_path_buf();
+        let file = std::fs::File::open(&path).map_err(|e| CoreError::io(&path, e))?;
+        // SAFETY: read-only map of a file we do not modify; see MerlFile::open.
+        let map = unsafe { Mmap::map(&file) }.map_err(|e| CoreError::io(&path, e))?;
+        let bad = |why: String| CoreError::bad_file(&path, why);
+        if brdf_merl::table::is_lfs_pointer(&map) {
+            return Err(bad(
+                "is a Git LFS pointer file, not a brdf-atlas store (run `git lfs pull` to fetch the real file)".into(),
+            ));
+        }
+        if map.len() < HEADER || &map[..8] != MAGIC {
+            return Err(bad(
+                "not a brdf-atlas store (missing BRDFSTOR header)".into()
+            ));
+        }
+        let u32_at = |o: usize| u32::from_le_bytes(map[o..o + 4].try_into().expect("4 bytes"));
+        let version = u32_at(8);
+        if version > VERSION {
+            return Err(bad(format!(
+                "store format version {version} was written by a newer brdf-atlas (this build reads version {VERSION}); upgrade brdf-atlas"
+            )));
+        }
+        if version != VERSION {
+            return Err(bad(format!(
+                "store format version {version}, this build reads version {VERSION}"
+            )));
+        }
+        let precision = match u32_at(12) {
+            4 => Precision::F32,
+            8 => Precision::F64,
+            b => return Err(bad(format!("{b} bytes per value, expected 4 or 8"))),
+        };
+        let n = u32_at(16) as usize;
+        let transform = match u32_at(20) {
+            0 => TransformKind::Raw,
+            1 => TransformKind::Log,
+            t => return Err(bad(format!("unknown transform code {t}"))),
+        };
+        let dims = Dims::new(
+            u32_at(24) as usize,
+            u32_at(28) as usize,
+            u32_at(32) as usize,
+        )
+        .map_err(|e| bad(format!("header {e}")))?;
+        if n == 0 || n > 1 << 20 {
+            return Err(bad(format!(
+                "header says {n} materials, expected 1 to 1048576"
+            )));
+        }
+        let layout = Layout::new(dims.values(), n, precision);
+        if map.len() != layout.len {
+            return Err(bad(format!(
+                "{} bytes, but {n} materials of {dims} in {} need {} (truncated or changed?)",
+                map.len(),
+                precision.name(),
+                layout.len
+            )));
+        }
+        Ok(Store {
+            path,
+            map,
+            dims,
+            transform,
+            precision,
+            layout,
+        })
+    }
+
+    /// The file behind the map.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Number of materials `N`.
+    pub fn n(&self) -> usize {
+        self.layout.n
+    }
+
+    /// Number of rows `d = 3 * bins`.
+    pub fn rows(&self) -> usize {
+        self.layout.rows
+    }
+
+    /// Table dims of the materials.
+    pub fn dims(&self) -> Dims {
+        self.dims
+    }
+
+    /// The data transform of the stored values.
+    pub fn transform(&self) -> TransformKind {
+        self.transform
+    }
+
+    /// Stored precision.
+    pub fn precision(&self) -> Precision {
+        self.precision
+    }
+
+    /// Size of the file in bytes.
+    pub fn len_bytes(&self) -> u64 {
+        self.map.len() as u64
+    }
+
+    /// The mean of each row, in transformed space.
+    pub fn mean(&self) -> &[f64] {
+        bytemuck::cast_slice(&self.map[self.layout.mean..self.layout.unmeasured])
+    }
+
+    /// 1 for rows where no input material was measured.
+    pub fn unmeasured(&self) -> &[u8] {
+        &self.map[self.layout.unmeasured..self.layout.unmeasured + self.layout.rows]
+    }
+
+    /// The centred values, `rows * n`, row-major.
+    pub fn z(&self) -> Rows<'_> {
+        let bytes = &self.map[self.layout.z..];
+        match self.precision {
+            Precision::F32 => Rows::F32(bytemuck::cast_slice(bytes)),
+            Precision::F64 => Rows::F64(bytemuck::cast_slice(bytes)),
+        }
+    }
+
+    /// Copy rows `r0..r0 + out.len() / n` into `out` as f64.
+    pub fn copy_rows(&self, r0: usize, out: &mut [f64]) {
+        let (start, len) = (r0 * self.layout.n, out.len());
+        match self.z() {
+            Rows::F32(z) => out
+                .iter_mut()
+                .zip(&z[start..start + len])
+                .for_each(|(o, v)| *o = *v as f64),
+            Rows::F64(z) => out.copy_from_slice(&z[start..start + len]),
+        }
+    }
+
+    /// `Y = Z Z^T` from the stored values (f64 accumulation), folded in a
+    /// fixed order: the same bits whatever the thread count.
+    pub fn gram(&self, progress: &dyn Progress) -> Mat<f64> {
+        progress.start("gram", self.rows() as u64);
+        let n = self.n();
+        let y = gram_fold(
+            self.rows(),
+            n,
+            progress,
+            || vec![0.0f64; n],
+            |row, r0, buf| {
+                let rows = buf.len() / n;
+                for r in 0..rows {
+                    self.copy_rows(r0 + r, row);
+                    for (i, v) in row.iter().enumerate() {
+                        buf[i * rows + r] = *v;
+                    }
+                }
+            },
+        );
+        progress.finish();
+        y
+    }
+
+    /// Checksum of the whole file (xxh3 of the xxh3 of each 8 MiB block, in order).
+    pub fn checksum(&self) -> u64 {
+        checksum_bytes(&self.map)
+    }
+}
+
+/// Checksum of a byte slice as [`Store::checksum`] defines it.
+pub fn checksum_bytes(bytes: &[u8]) -> u64 {
+    const BLOCK: usize = 8 << 20;
+    let hashes: Vec<u8> = bytes
+        .par_chunks(BLOCK)
+        .map(xxhash_rust::xxh3::xxh3_64)
+        .collect::<Vec<u64>>()
+        .iter()
+        .flat_map(|h| h.to_le_bytes())
+        .collect();
+    xxhash_rust::xxh3::xxh3_64(&hashes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    use crate::data::{Dataset, synth_dir};
+    use crate::progress::NoProgress;
+
+    #[test]
+    fn bad_stores_are_refused_with_reasons() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dims = Dims::new(4, 4, 8).unwrap();
+        synth_dir(tmp.path(), 3, dims);
+        let data = Dataset::open_dir(tmp.path()).unwrap();
+        let path = tmp.path().join("x.store");
+        build_store(
+            &data,
+            TransformKind::Raw,
+            Precision::F64,
+            &path,
+            &NoProgress,
+        )
+        .unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        let cut = tmp.path().join("cut.store");
+        std::fs::write(&cut, &bytes[..bytes.len() - 8]).unwrap();
+        assert!(
+            Store::open(&cut)
+                .unwrap_err()
+                .to_string()
+                .contains("truncated")
+        );
+        let mut v2 = bytes.clone();
+        v2[8] = 9;
+        std::fs::write(&cut, &v2).unwrap();
+        assert!(
+            Store::open(&cut)
+                .unwrap_err()
+                .to_string()
+                .contains("version 9")
+        );
+        std::fs::write(&cut, b"hello").unwrap();
+        assert!(
+            Store::open(&cut)
+                .unwrap_err()
+                .to_string()
+                .contains("not a brdf-atlas store")
+        );
+    }
+}
