@@ -33,7 +33,6 @@
 use brdf_merl::Dims;
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef, Par, Side};
-use rayon::prelude::*;
 
 use crate::data::store::{Rows, Store};
 use crate::data::transform::{InverseForm, Transform, TransformKind};
@@ -42,12 +41,10 @@ use crate::gplvm::kernel::Kernel;
 use crate::gplvm::likelihood::factor;
 use crate::progress::Progress;
 use crate::simd::fastlog::log1p;
+use crate::simd::fold::{GROUPS, ordered_blocks};
 
 /// Rows of the store per block of the LOO pass.
 const BLOCK: usize = 1024;
-/// Blocks are folded in this many fixed groups, in order: the sums do not
-/// depend on the thread count.
-const GROUPS: usize = 64;
 
 /// The GP leave-one-out predictor of latent points `latent` (`N x q`).
 pub fn gp_predictor(
@@ -214,9 +211,6 @@ fn cosines(dims: Dims) -> (Vec<f64>, Vec<bool>) {
         .unzip()
 }
 
-/// One group's sums: transformed, reflectance and log squared errors, scored rows.
-type Partial = (Vec<f64>, Vec<f64>, Vec<f64>, usize);
-
 /// Apply every predictor to every row of `store` and sum the squared errors
 /// per material: one streaming pass, parallel over fixed groups of blocks
 /// folded in order (same bits for any thread count).
@@ -243,8 +237,6 @@ pub fn evaluate(
     let (cos, grazing) = cosines(dims);
     let log_space = store.transform() == TransformKind::Log;
     let transform = store.transform().build(dims);
-    let blocks = rows.div_ceil(BLOCK);
-    let groups = GROUPS.min(blocks.max(1));
     let scoring = Scoring {
         n,
         bins,
@@ -256,50 +248,58 @@ pub fn evaluate(
         log_space,
     };
     progress.start("loo", rows as u64);
-    let partials: Vec<Partial> = (0..groups)
-        .into_par_iter()
-        .map(|g| {
-            let mut sums = Sums {
+    struct Group {
+        sums: Sums,
+        scored: usize,
+        zbuf: Vec<f64>,
+        out: Vec<f64>,
+        row: RowScratch,
+    }
+    let partials = ordered_blocks(
+        rows,
+        BLOCK,
+        GROUPS,
+        || Group {
+            sums: Sums {
                 transformed: vec![0.0; mn],
                 raw: vec![0.0; mn],
                 log: vec![0.0; mn],
-            };
-            let mut scored = 0usize;
-            let mut zbuf = vec![0.0f64; BLOCK * n];
-            let mut out = vec![0.0f64; BLOCK * mn];
-            let mut row = RowScratch {
+            },
+            scored: 0,
+            zbuf: vec![0.0f64; BLOCK * n],
+            out: vec![0.0f64; BLOCK * mn],
+            row: RowScratch {
                 truth: vec![0.0; n],
                 reflectance: vec![0.0; n],
                 log: vec![0.0; n],
-            };
-            for b in (g * blocks / groups)..((g + 1) * blocks / groups) {
-                let r0 = b * BLOCK;
-                let r1 = (r0 + BLOCK).min(rows);
-                let len = r1 - r0;
-                let z = &mut zbuf[..len * n];
-                match store.z() {
-                    Rows::F32(s) => z
-                        .iter_mut()
-                        .zip(&s[r0 * n..r1 * n])
-                        .for_each(|(o, v)| *o = *v as f64),
-                    Rows::F64(s) => z.copy_from_slice(&s[r0 * n..r1 * n]),
-                }
-                let zc = MatRef::from_column_major_slice(z, n, len);
-                let o = faer::MatMut::from_column_major_slice_mut(&mut out[..len * mn], mn, len);
-                matmul(o, Accum::Replace, stacked.as_ref(), zc, 1.0, Par::Seq);
-                scored += score_block(&scoring, r0, z, &out[..len * mn], &mut sums, &mut row);
-                progress.advance(len as u64);
+            },
+        },
+        |g, range| {
+            let (r0, r1, len) = (range.start, range.end, range.len());
+            let z = &mut g.zbuf[..len * n];
+            match store.z() {
+                Rows::F32(s) => z
+                    .iter_mut()
+                    .zip(&s[r0 * n..r1 * n])
+                    .for_each(|(o, v)| *o = *v as f64),
+                Rows::F64(s) => z.copy_from_slice(&s[r0 * n..r1 * n]),
             }
-            (sums.transformed, sums.raw, sums.log, scored)
-        })
-        .collect();
+            let zc = MatRef::from_column_major_slice(z, n, len);
+            let o = faer::MatMut::from_column_major_slice_mut(&mut g.out[..len * mn], mn, len);
+            matmul(o, Accum::Replace, stacked.as_ref(), zc, 1.0, Par::Seq);
+            g.scored += score_block(&scoring, r0, z, &g.out[..len * mn], &mut g.sums, &mut g.row);
+            progress.advance(len as u64);
+        },
+    );
     progress.finish();
     let (mut et, mut ef, mut el, mut scored) = (vec![0.0; mn], vec![0.0; mn], vec![0.0; mn], 0);
-    for (pt, pf, pl, ps) in partials {
-        et.iter_mut().zip(pt).for_each(|(a, b)| *a += b);
-        ef.iter_mut().zip(pf).for_each(|(a, b)| *a += b);
-        el.iter_mut().zip(pl).for_each(|(a, b)| *a += b);
-        scored += ps;
+    for g in partials {
+        et.iter_mut()
+            .zip(g.sums.transformed)
+            .for_each(|(a, b)| *a += b);
+        ef.iter_mut().zip(g.sums.raw).for_each(|(a, b)| *a += b);
+        el.iter_mut().zip(g.sums.log).for_each(|(a, b)| *a += b);
+        scored += g.scored;
     }
     let errors = (0..count)
         .map(|m| Errors {

@@ -9,11 +9,11 @@
 //! when `q > 2`), then Hooke-Jeeves refinement.
 
 use brdf_merl::MerlFile;
-use rayon::prelude::*;
 
 use crate::error::{CoreError, Result};
 use crate::gplvm::optim::BOX;
 use crate::model::Model;
+use crate::simd::fold::ordered_blocks;
 
 /// Where a material lands.
 #[derive(Debug, Clone, PartialEq)]
@@ -44,28 +44,28 @@ impl Model {
         let mean = store.mean();
         // b = Z z and |z|^2, in fixed chunks folded in order.
         let chunk = 1 << 16;
-        let parts: Vec<(Vec<f64>, f64)> = (0..rows.div_ceil(chunk))
-            .into_par_iter()
-            .map(|k| {
-                let (r0, r1) = (k * chunk, ((k + 1) * chunk).min(rows));
-                let mut raw = vec![0.0; r1 - r0];
+        let parts = ordered_blocks(
+            rows,
+            chunk,
+            usize::MAX,
+            || (vec![0.0; n], 0.0),
+            |(b, s), range| {
+                let r0 = range.start;
+                let mut raw = vec![0.0; range.len()];
                 file.copy_raw(r0, &mut raw);
-                let mut t = vec![0.0; r1 - r0];
+                let mut t = vec![0.0; range.len()];
                 self.transform.forward_raw_rows(bins, r0, &raw, &mut t);
-                let mut b = vec![0.0; n];
-                let mut s = 0.0;
                 let mut zrow = vec![0.0; n];
                 for (j, tv) in t.iter().enumerate() {
                     let z = tv - mean[r0 + j];
-                    s += z * z;
+                    *s += z * z;
                     store.copy_rows(r0 + j, &mut zrow);
                     for (bi, zi) in b.iter_mut().zip(&zrow) {
                         *bi += z * zi;
                     }
                 }
-                (b, s)
-            })
-            .collect();
+            },
+        );
         let mut b = vec![0.0; n];
         let mut s = 0.0;
         for (pb, ps) in parts {
