@@ -112,17 +112,25 @@ pub fn angles(text: &str) -> Result<Angles, String> {
 
 /// Parse `x0,x1,y0,y1` into a checked [`View`].
 pub fn view(text: &str) -> Result<View, String> {
-    const EXPECTED: &str =
-        "--view expects four numbers x0,x1,y0,y1 with x0 < x1 and y0 < y1, like -1.1,1.1,-1.1,1.1";
+    let expected = || {
+        format!(
+            "--view expects four numbers x0,x1,y0,y1 with x0 < x1 and y0 < y1, like {}, got {text:?}",
+            default_view()
+        )
+    };
     match numbers(text).as_deref() {
         Some(&[x0, x1, y0, y1]) => {
             let v = View { x0, x1, y0, y1 };
-            v.check()
-                .map(|()| v)
-                .map_err(|_| format!("{EXPECTED}, got {text:?}"))
+            v.check().map(|()| v).map_err(|_| expected())
         }
-        _ => Err(format!("{EXPECTED}, got {text:?}")),
+        _ => Err(expected()),
     }
+}
+
+/// The default view as `--view` takes it: `-1.1,1.1,-1.1,1.1`.
+pub fn default_view() -> String {
+    let View { x0, x1, y0, y1 } = View::default();
+    format!("{x0},{x1},{y0},{y1}")
 }
 
 /// What every bad `--dims` value is told.
@@ -240,6 +248,8 @@ mod tests {
     fn views_are_ordered_windows() {
         let v = view("-1,1,-0.5,0.5").unwrap();
         assert_eq!((v.x0, v.x1, v.y0, v.y1), (-1.0, 1.0, -0.5, 0.5));
+        assert_eq!(default_view(), "-1.1,1.1,-1.1,1.1");
+        assert_eq!(view(&default_view()).unwrap(), View::default());
         for bad in ["1,-1,0,1", "0,1,0,0", "0,1,0", "a,b,c,d"] {
             assert!(
                 view(bad).unwrap_err().starts_with("--view expects"),

@@ -5,6 +5,7 @@ use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+use brdf_atlas_core::limits::MAX_Q;
 use brdf_atlas_core::{FitOptions, FitReport, fit_dir, store_path_for};
 use brdf_atlas_core::{GplvmParams, Store};
 
@@ -38,8 +39,7 @@ pub struct Args {
     /// Model file to write (its data goes to MODEL.store beside it).
     #[arg(short = 'o', long = "output", value_name = "MODEL")]
     pub model: PathBuf,
-    /// Latent dimension (a map needs 2); must be smaller than the number of materials.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 2, help = q_help())]
     pub q: usize,
     /// Space the model sees the values in: `log` compresses highlights
     /// (log(1 + f cos_i cos_o)), `raw` is the reflectance itself.
@@ -60,6 +60,13 @@ pub struct Args {
     /// Hooke-Jeeves stops when its step falls below this.
     #[arg(long, default_value_t = DEFAULT_MIN_STEP, allow_negative_numbers = true)]
     pub min_step: f64,
+}
+
+/// `--q`'s help, with the bound the fit checks ([`MAX_Q`]).
+fn q_help() -> String {
+    format!(
+        "Latent dimension, 1 to {MAX_Q} (a map needs 2); must be smaller than the number of materials"
+    )
 }
 
 /// A finished fit: the library's report and what the summary adds.

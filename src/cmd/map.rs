@@ -8,6 +8,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use brdf_atlas_core::Model;
+use brdf_atlas_core::limits::MAX_MAP_SIDE;
 use brdf_atlas_core::render::{self, Picture};
 use brdf_atlas_core::{AlbedoMethod, DEFAULT_SAMPLES, View};
 use brdf_merl::atomic::commit_all;
@@ -44,20 +45,33 @@ pub struct Args {
     #[arg(long, value_name = "JSON")]
     pub json: Option<PathBuf>,
     /// Width and height in pixels.
-    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..=MAX_MAP_SIDE as i64))]
     pub size: u32,
     /// Number of luminance contour lines.
     #[arg(long, default_value_t = DEFAULT_CONTOURS, value_parser = clap::value_parser!(u32).range(0..=1000))]
     pub contours: u32,
-    /// Quadrature samples per pixel (any model); without it, none for raw, 256 for log.
-    #[arg(long, value_name = "S", value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    #[arg(long, value_name = "S", help = samples_help(), value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub samples: Option<u32>,
-    /// Latent window x0,x1,y0,y1 [default: -1.1,1.1,-1.1,1.1].
-    #[arg(long, value_name = "X0,X1,Y0,Y1", value_parser = args::view, allow_hyphen_values = true)]
+    #[arg(long, value_name = "X0,X1,Y0,Y1", help = view_help(), value_parser = args::view, allow_hyphen_values = true)]
     pub view: Option<View>,
     /// Do not write material names beside their points.
     #[arg(long)]
     pub no_labels: bool,
+}
+
+/// `--samples`' help, with the core's default.
+fn samples_help() -> String {
+    format!(
+        "Quadrature samples per pixel (any model); without it, none for raw, {DEFAULT_SAMPLES} for log"
+    )
+}
+
+/// `--view`'s help, with the core's default view.
+fn view_help() -> String {
+    format!(
+        "Latent window x0,x1,y0,y1 [default: {}]",
+        args::default_view()
+    )
 }
 
 /// The sidecar path: as given, or the PNG's with `.json`.

@@ -23,6 +23,7 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use brdf_atlas_core::Dataset;
+use brdf_atlas_core::limits::MAX_Q;
 use brdf_merl::atomic::{StagedDir, write_atomic};
 
 use self::measure::{Results, Steps};
@@ -52,8 +53,7 @@ pub struct Args {
     /// Report directory to write.
     #[arg(short = 'o', long = "output", value_name = "REPORT_DIR")]
     pub out: PathBuf,
-    /// Largest latent dimension of the leave-one-out sweep [default: 8, 3 with --quick].
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16))]
+    #[arg(long, help = plan::q_max_help(), value_parser = clap::value_parser!(u32).range(1..=MAX_Q as i64))]
     pub q_max: Option<u32>,
     /// Fewer settings (sample counts, map sizes, steps): a report in seconds on small data.
     #[arg(long)]

@@ -10,6 +10,13 @@ pub const DEFAULT_Q_MAX: usize = 8;
 /// `--q-max` under `--quick` when not given.
 pub const QUICK_Q_MAX: usize = 3;
 
+/// `--q-max`'s help, with its defaults.
+pub fn q_max_help() -> String {
+    format!(
+        "Largest latent dimension of the leave-one-out sweep [default: {DEFAULT_Q_MAX}, {QUICK_Q_MAX} with --quick]"
+    )
+}
+
 /// The settings each part of the report sweeps.
 pub struct Plan {
     /// Largest latent dimension of the leave-one-out sweep (below the
