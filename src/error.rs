@@ -33,7 +33,8 @@ pub enum Error {
         /// The directory.
         path: PathBuf,
     },
-    /// Putting a written output file in place failed.
+    /// Writing an output file (or directory), or putting it in place,
+    /// failed. Output failures are this, never [`Error::Input`].
     #[error("{}: {source}", path.display())]
     Write {
         /// The file.

@@ -244,6 +244,70 @@ impl Drop for PendingFile {
     }
 }
 
+/// A directory filled under a temporary name beside its target and put in
+/// place as a whole by [`StagedDir::commit`]: readers see the old directory
+/// (if any) or the complete new one, never a part. Dropped without a commit,
+/// it removes itself and everything in it.
+pub struct StagedDir {
+    dir: PathBuf,
+    target: PathBuf,
+    committed: bool,
+}
+
+impl StagedDir {
+    /// Create the temporary directory for `target` (and any missing parent).
+    pub fn create(target: &Path) -> io::Result<StagedDir> {
+        let dir = temp_path_for(target);
+        std::fs::create_dir_all(&dir)?;
+        Ok(StagedDir {
+            dir,
+            target: target.to_path_buf(),
+            committed: false,
+        })
+    }
+
+    /// The temporary directory, to write into.
+    pub fn path(&self) -> &Path {
+        &self.dir
+    }
+
+    /// The path the directory takes on commit.
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// Put the directory in place, replacing whatever is at the target: the
+    /// old one is moved aside first (and moved back if the new one cannot
+    /// take its place), then removed. The error names the path that failed.
+    pub fn commit(mut self) -> Result<(), (PathBuf, io::Error)> {
+        let old = temp_path_for(&self.target);
+        let had_old = std::fs::symlink_metadata(&self.target).is_ok();
+        if had_old {
+            std::fs::rename(&self.target, &old).map_err(|e| (self.target.clone(), e))?;
+        }
+        if let Err(e) = std::fs::rename(&self.dir, &self.target) {
+            if had_old {
+                // Best effort: the error below is what matters.
+                let _ = std::fs::rename(&old, &self.target);
+            }
+            return Err((self.target.clone(), e));
+        }
+        self.committed = true;
+        if had_old {
+            std::fs::remove_dir_all(&old).map_err(|e| (old, e))?;
+        }
+        Ok(())
+    }
+}
+
+impl Drop for StagedDir {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_dir_all(&self.dir);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -298,5 +362,37 @@ mod tests {
         p.commit(true).unwrap();
         assert_eq!(std::fs::metadata(&path).unwrap().len(), 10);
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn staged_dir_replaces_the_target_whole_or_not_at_all() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("nested").join("report");
+        let names = |p: &Path| {
+            let mut v: Vec<String> = std::fs::read_dir(p)
+                .unwrap()
+                .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .collect();
+            v.sort();
+            v
+        };
+        // Dropped: nothing left, the target never appears.
+        {
+            let staged = StagedDir::create(&target).unwrap();
+            std::fs::write(staged.path().join("a.txt"), b"a").unwrap();
+            assert_eq!(staged.target(), target);
+        }
+        assert_eq!(names(&dir.path().join("nested")), Vec::<String>::new());
+        // Committed: in place with its content.
+        let staged = StagedDir::create(&target).unwrap();
+        std::fs::write(staged.path().join("a.txt"), b"first").unwrap();
+        staged.commit().unwrap();
+        assert_eq!(std::fs::read(target.join("a.txt")).unwrap(), b"first");
+        // Committed again: the old directory is gone, not merged.
+        let staged = StagedDir::create(&target).unwrap();
+        std::fs::write(staged.path().join("b.txt"), b"second").unwrap();
+        staged.commit().unwrap();
+        assert_eq!(names(&target), ["b.txt"]);
+        assert_eq!(names(&dir.path().join("nested")), ["report"]);
     }
 }

@@ -10,19 +10,33 @@ use brdf_merl::synth::database;
 use brdf_merl::table::HEADER_BYTES;
 use rayon::prelude::*;
 
+use crate::args;
 use crate::error::Error;
 use crate::progress;
 
-/// What to synthesise, and where.
-#[derive(Debug, Clone)]
-pub struct Options {
+/// Largest number of materials `synth` and `demo` write.
+pub const MAX_COUNT: i64 = 10_000;
+
+/// Write a synthetic database of analytic materials as MERL files.
+///
+/// Each material is a Lambertian base plus a GGX microfacet lobe with
+/// Fresnel, alternating metals and dielectrics, with colours and
+/// roughness drawn from a seeded generator: the same count and seed always
+/// give the same files. Files are named `NNN-kind-colour-rROUGHNESS.binary`
+/// and written atomically.
+#[derive(Debug, Clone, clap::Args)]
+pub struct Args {
     /// Number of materials.
-    pub count: usize,
-    /// Table dims of every file.
+    #[arg(long, default_value_t = 24, value_parser = clap::value_parser!(u32).range(1..=MAX_COUNT))]
+    pub count: u32,
+    /// Table dims n_theta_h,n_theta_d,n_phi_d. BRDF Explorer needs 90,90,180.
+    #[arg(long, default_value = "90,90,180", value_name = "A,B,C", value_parser = args::dims, allow_hyphen_values = true)]
     pub dims: Dims,
     /// Seed of the material generator.
+    #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Output directory, created if missing.
+    /// Directory to write into (created if missing).
+    #[arg(value_name = "OUT_DIR")]
     pub out_dir: PathBuf,
 }
 
@@ -30,19 +44,19 @@ pub struct Options {
 /// written, in database order. Every file is written under a temporary name
 /// first and all take their places only once all are written, so a failed
 /// or interrupted run replaces no file and leaves no partial one.
-pub fn write_database(options: &Options) -> Result<Vec<PathBuf>, Error> {
-    let dir = &options.out_dir;
+pub fn write_database(args: &Args) -> Result<Vec<PathBuf>, Error> {
+    let dir = &args.out_dir;
     std::fs::create_dir_all(dir).map_err(|source| Error::CreateDir {
         path: dir.clone(),
         source,
     })?;
-    let materials = database(options.count, options.seed);
+    let materials = database(args.count as usize, args.seed);
     let pb = progress::bar(materials.len(), "synthesising");
     let staged = materials
         .par_iter()
         .map(|m| {
             let path = dir.join(format!("{}.binary", m.name));
-            let staged = m.brdf.table(options.dims).stage(&path)?;
+            let staged = m.brdf.table(args.dims).stage(&path)?;
             pb.inc(1);
             Ok(staged)
         })
@@ -55,16 +69,16 @@ pub fn write_database(options: &Options) -> Result<Vec<PathBuf>, Error> {
 }
 
 /// Run `synth`: write the files, then say what was written where.
-pub fn run(options: &Options) -> Result<ExitCode, Error> {
-    let paths = write_database(options)?;
-    let mb = (HEADER_BYTES + 8 * options.dims.values()) as f64 / 1e6;
+pub fn run(args: &Args) -> Result<ExitCode, Error> {
+    let paths = write_database(args)?;
+    let mb = (HEADER_BYTES + 8 * args.dims.values()) as f64 / 1e6;
     writeln!(
         io::stdout(),
         "wrote {} materials ({}, {mb:.1} MB each, seed {}) to {}",
         paths.len(),
-        options.dims,
-        options.seed,
-        options.out_dir.display()
+        args.dims,
+        args.seed,
+        args.out_dir.display()
     )?;
     Ok(ExitCode::SUCCESS)
 }

@@ -8,8 +8,25 @@ use brdf_atlas_core::Located;
 use brdf_atlas_core::Model;
 use brdf_merl::MerlFile;
 
-use crate::coords::Point;
 use crate::error::Error;
+use crate::format::point;
+
+/// Find where MERL files land in a fitted latent space.
+///
+/// For each file: the latent point whose reconstruction is closest to it,
+/// the error of that reconstruction against the material's own spread
+/// around the mean, and the three nearest materials of the model. The
+/// files must have the model's dims. A file that cannot be read gets one
+/// `error:` line; the others are still reported, and the exit status is 1.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Model file written by `fit`.
+    #[arg(value_name = "MODEL")]
+    pub model: PathBuf,
+    /// MERL `.binary` files.
+    #[arg(required = true, value_name = "FILE")]
+    pub files: Vec<PathBuf>,
+}
 
 /// Locate one MERL file in `model`.
 pub fn locate(model: &Model, path: &Path) -> Result<Located, Error> {
@@ -28,7 +45,7 @@ pub fn write_located(
     path: &Path,
     l: &Located,
 ) -> io::Result<()> {
-    writeln!(out, "{}: at {}", path.display(), Point::show(&l.point))?;
+    writeln!(out, "{}: at {}", path.display(), point(&l.point))?;
     writeln!(
         out,
         "  rmse {:.4e}, spread {:.4e}, rmse/spread {:.4} (transformed space; 1 is no better than the mean material)",
@@ -47,11 +64,11 @@ pub fn write_located(
 
 /// Run `locate`: a report per readable file, one `error:` line per other
 /// file, status 1 if there was any.
-pub fn run(model_path: &Path, files: &[PathBuf]) -> Result<ExitCode, Error> {
-    let model = Model::open(model_path)?;
+pub fn run(args: &Args) -> Result<ExitCode, Error> {
+    let model = Model::open(&args.model)?;
     let mut failed = false;
     let mut out = io::stdout().lock();
-    for path in files {
+    for path in &args.files {
         match locate(&model, path) {
             Ok(l) => write_located(&mut out, &model, path, &l)?,
             Err(e) => {

@@ -5,23 +5,31 @@ use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use brdf_atlas_core::Model;
-
-use crate::coords::{Angles, Point};
+use crate::args::{self, Angles, ModelPoint};
 use crate::error::Error;
+use crate::format::point;
 
-/// Which model, where in it, and which direction pairs.
-#[derive(Debug, Clone)]
-pub struct Options {
-    /// Model file.
-    pub model: PathBuf,
-    /// Latent point.
-    pub at: Point,
-    /// Incident direction (with `wo`).
+/// Print the RGB reflectance of the material at a latent point for pairs of directions.
+///
+/// Directions are angles in degrees: theta from the normal, phi around
+/// it. Give one incident direction and one or more outgoing ones
+/// (`--wi 30,0 --wo 30,180 --wo 45,180`), or a file of pairs. Only the
+/// bins asked for are reconstructed. A pair with a direction below the
+/// horizon, or in a bin no input material measured, has no value.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    #[command(flatten)]
+    pub target: ModelPoint,
+    /// Incident direction, theta,phi in degrees.
+    #[arg(long, value_name = "THETA,PHI", value_parser = args::angles, allow_hyphen_values = true,
+          required_unless_present = "batch", conflicts_with = "batch")]
     pub wi: Option<Angles>,
-    /// Outgoing directions, each paired with `wi`.
+    /// Outgoing direction, theta,phi in degrees; repeat for more.
+    #[arg(long, value_name = "THETA,PHI", value_parser = args::angles, allow_hyphen_values = true,
+          required_unless_present = "batch", conflicts_with = "batch")]
     pub wo: Vec<Angles>,
-    /// A file of `theta_i phi_i theta_o phi_o` lines instead.
+    /// File of pairs, one a line: theta_i phi_i theta_o phi_o (degrees; `#` starts a comment).
+    #[arg(long, value_name = "FILE")]
     pub batch: Option<PathBuf>,
 }
 
@@ -68,18 +76,17 @@ pub fn read_batch(path: &Path) -> Result<Vec<(Angles, Angles)>, Error> {
 }
 
 /// Run `eval`: one row per pair, reflectance or why there is none.
-pub fn run(options: &Options) -> Result<ExitCode, Error> {
-    let pairs: Vec<(Angles, Angles)> = match (&options.batch, options.wi) {
+pub fn run(args: &Args) -> Result<ExitCode, Error> {
+    let pairs: Vec<(Angles, Angles)> = match (&args.batch, args.wi) {
         (Some(path), _) => read_batch(path)?,
-        (None, Some(wi)) => options.wo.iter().map(|&wo| (wi, wo)).collect(),
+        (None, Some(wi)) => args.wo.iter().map(|&wo| (wi, wo)).collect(),
         (None, None) => {
             return Err(Error::Input(
                 "eval needs --wi and --wo, or --batch FILE".into(),
             ));
         }
     };
-    let model = Model::open(&options.model)?;
-    let x = options.at.check(model.q(), &options.model)?;
+    let (model, x) = args.target.open()?;
     let blend = model.at(x)?;
     let directions: Vec<_> = pairs
         .iter()
@@ -90,8 +97,8 @@ pub fn run(options: &Options) -> Result<ExitCode, Error> {
     writeln!(
         out,
         "{} at {}: RGB reflectance (1/sr)",
-        options.model.display(),
-        Point::show(x)
+        args.target.model.display(),
+        point(x)
     )?;
     writeln!(
         out,

@@ -4,16 +4,18 @@
 //! library is needed. Log axes are drawn as linear axes over `log10` of the
 //! values, labelled with the values themselves.
 
+use std::io;
 use std::path::Path;
 
+use brdf_atlas_core::{OptimizerKind, TransformKind};
 use plotters::prelude::*;
 use plotters::style::{FontStyle, register_font};
 
-use super::Results;
+use super::measure::{LooRow, Results, SampleRow};
+use super::write_file;
 use crate::error::Error;
-use brdf_atlas_core::{OptimizerKind, TransformKind};
 
-static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
+static FONT: &[u8] = include_bytes!("../../../assets/DejaVuSans.ttf");
 
 const WIDTH: u32 = 720;
 const HEIGHT: u32 = 440;
@@ -34,8 +36,12 @@ struct Axis<'a> {
     integer: bool,
 }
 
+/// A plot that could not be drawn is an output that could not be written.
 fn err(path: &Path, e: impl std::fmt::Display) -> Error {
-    Error::Input(format!("{}: cannot draw plot: {e}", path.display()))
+    Error::Write {
+        path: path.to_path_buf(),
+        source: io::Error::other(format!("cannot draw plot: {e}")),
+    }
 }
 
 fn scale(v: f64, log: bool) -> f64 {
@@ -163,13 +169,18 @@ fn chart(path: &Path, title: &str, x: Axis, y: Axis, series: &[Series]) -> Resul
 }
 
 fn write_png(path: &Path, rgb: &[u8]) -> Result<(), Error> {
-    let file = std::fs::File::create(path).map_err(|e| err(path, e))?;
-    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), WIDTH, HEIGHT);
-    enc.set_color(png::ColorType::Rgb);
-    enc.set_depth(png::BitDepth::Eight);
-    let mut w = enc.write_header().map_err(|e| err(path, e))?;
-    w.write_image_data(rgb).map_err(|e| err(path, e))?;
-    w.finish().map_err(|e| err(path, e))
+    let encoding = |e: png::EncodingError| match e {
+        png::EncodingError::IoError(e) => e,
+        e => io::Error::other(e),
+    };
+    write_file(path, |file| {
+        let mut enc = png::Encoder::new(file, WIDTH, HEIGHT);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut w = enc.write_header().map_err(encoding)?;
+        w.write_image_data(rgb).map_err(encoding)?;
+        w.finish().map_err(encoding)
+    })
 }
 
 /// Draw every plot of the report into `dir`.
@@ -177,7 +188,7 @@ pub fn all(dir: &Path, r: &Results) -> Result<(), Error> {
     // Registering twice (a demo then a report in one process) is harmless.
     register_font("sans-serif", FontStyle::Normal, FONT)
         .map_err(|_| Error::Input("embedded font DejaVuSans.ttf is invalid".into()))?;
-    let loo_series = |metric: fn(&super::LooRow) -> f64| {
+    let loo_series = |metric: fn(&LooRow) -> f64| {
         let mut out = Vec::new();
         let mut k = 0;
         for t in [TransformKind::Log, TransformKind::Raw] {
@@ -274,7 +285,7 @@ pub fn all(dir: &Path, r: &Results) -> Result<(), Error> {
         )?;
     }
     if !r.samples.is_empty() {
-        let pts = |f: fn(&super::SampleRow) -> f64| -> Vec<(f64, f64)> {
+        let pts = |f: fn(&SampleRow) -> f64| -> Vec<(f64, f64)> {
             r.samples.iter().map(|m| (m.samples as f64, f(m))).collect()
         };
         chart(

@@ -10,7 +10,25 @@ use brdf_merl::{Dims, MerlFile, MerlTable, Quadrature};
 use rayon::prelude::*;
 
 use crate::error::Error;
+use crate::format::table_value;
 use crate::progress;
+
+/// Check MERL files and summarise them: dims, unmeasured values, range, albedo.
+///
+/// For each file: its dims, and per colour channel the number of
+/// unmeasured (negative) values, the min, max and mean of the measured
+/// values in reflectance units (1/sr, MERL's scales applied), and the
+/// albedo (directional-hemispherical reflectance averaged over incident
+/// directions; a Lambertian BRDF of reflectance rho gives rho).
+///
+/// A file that cannot be read gets one `error:` line on stderr naming it;
+/// the other files are still reported, and the exit status is 1.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// MERL `.binary` files.
+    #[arg(required = true, value_name = "FILE")]
+    pub files: Vec<PathBuf>,
+}
 
 /// Sub-cells per bin axis of the albedo rule: accurate to about 1e-4 on MERL dims.
 const ALBEDO_SUBDIVISION: usize = 2;
@@ -102,8 +120,8 @@ fn open(path: &Path) -> Result<MerlFile, Error> {
 /// Run `info`: the table on stdout, a warning for dims other than MERL's,
 /// one `error:` line per unreadable file on stderr, status 1 if there was any
 /// (even when stdout was closed early).
-pub fn run(paths: &[PathBuf]) -> Result<ExitCode, Error> {
-    let results = summarise(paths);
+pub fn run(args: &Args) -> Result<ExitCode, Error> {
+    let results = summarise(&args.files);
     let good: Vec<&Summary> = results.iter().filter_map(|r| r.as_ref().ok()).collect();
     let report = if good.is_empty() {
         Ok(())
@@ -177,9 +195,9 @@ pub fn write_table(out: &mut impl Write, summaries: &[&Summary]) -> io::Result<(
                 out,
                 "{name:<name_width$}  {dims:<dims_width$}  {channel:<2}  {:>9}  {:>10}  {:>10}  {:>10}  {:>8.4}",
                 st.invalid,
-                number(st.min),
-                number(st.max),
-                number(st.mean),
+                table_value(st.min),
+                table_value(st.max),
+                table_value(st.mean),
                 s.albedo[c],
             )?;
         }
@@ -217,45 +235,9 @@ pub fn write_albedo_table(out: &mut impl Write, summaries: &[&Summary]) -> io::R
     Ok(())
 }
 
-/// A value in at most 10 characters: fixed point where that reads well,
-/// scientific otherwise, `-` where there is none (no measured value).
-fn number(v: f64) -> String {
-    if !v.is_finite() {
-        "-".into()
-    } else if v == 0.0 || (0.01..1000.0).contains(&v.abs()) {
-        format!("{v:.4}")
-    } else {
-        format!("{v:.3e}")
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn numbers_fit_their_column() {
-        for v in [
-            0.0,
-            1e-9,
-            0.0123,
-            0.5,
-            12.345,
-            999.99,
-            1234.5,
-            1.5e5,
-            -0.25,
-            -3e-4,
-            f64::NAN,
-            f64::INFINITY,
-        ] {
-            let s = number(v);
-            assert!(s.len() <= 10, "{v}: {s}");
-        }
-        assert_eq!(number(0.5), "0.5000");
-        assert_eq!(number(1.5e5), "1.500e5");
-        assert_eq!(number(f64::NAN), "-");
-    }
 
     #[test]
     fn table_rows_align() {

@@ -4,35 +4,69 @@
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::time::Duration;
 
+use brdf_atlas_core::limits::MAX_Q;
 use brdf_atlas_core::{FitOptions, FitReport, fit_dir, store_path_for};
-use brdf_atlas_core::{GplvmParams, OptimizerKind, Precision, Store, TransformKind};
+use brdf_atlas_core::{GplvmParams, Store};
 
+use crate::args::{OptimizerArg, PrecisionArg, TransformArg};
 use crate::error::Error;
+use crate::format::{cost, secs, size};
 use crate::progress::Bars;
 
-/// What to fit, how, and where the model goes.
-#[derive(Debug, Clone)]
-pub struct Options {
+/// `--length-scale` when not given.
+pub const DEFAULT_LENGTH_SCALE: f64 = 1.0;
+/// `--noise` when not given.
+pub const DEFAULT_NOISE: f64 = 1e-4;
+/// `--min-step` when not given.
+pub const DEFAULT_MIN_STEP: f64 = 1e-3;
+
+/// Fit a latent space to a directory of MERL files and write the model.
+///
+/// Every `.binary` file of MERL_DIR (sorted by name) becomes a material;
+/// other entries are ignored with a warning, and an invalid MERL file
+/// stops the fit with an error naming it. The data is transformed,
+/// centred and packed into MODEL.store beside MODEL (memory-mapped later
+/// by every other command); the latent points are fitted by minimising
+/// the GPLVM negative log likelihood from a PCA start. Both files are
+/// written atomically. Ends with a summary: cost, search, numerical
+/// health and the time of each phase.
+#[derive(Debug, Clone, clap::Args)]
+pub struct Args {
     /// Directory of MERL `.binary` files.
+    #[arg(value_name = "MERL_DIR")]
     pub dir: PathBuf,
-    /// Model file to write (`MODEL.store` goes beside it).
+    /// Model file to write (its data goes to MODEL.store beside it).
+    #[arg(short = 'o', long = "output", value_name = "MODEL")]
     pub model: PathBuf,
-    /// Latent dimension.
+    #[arg(long, default_value_t = 2, help = q_help())]
     pub q: usize,
-    /// Data transform.
-    pub transform: TransformKind,
-    /// Optimiser.
-    pub optimizer: OptimizerKind,
-    /// Store precision.
-    pub precision: Precision,
-    /// RBF length scale.
+    /// Space the model sees the values in: `log` compresses highlights
+    /// (log(1 + f cos_i cos_o)), `raw` is the reflectance itself.
+    #[arg(long, value_enum, default_value_t = TransformArg::Log)]
+    pub transform: TransformArg,
+    /// Optimiser of the latent points.
+    #[arg(long, value_enum, default_value_t = OptimizerArg::HookeJeeves)]
+    pub optimizer: OptimizerArg,
+    /// Precision of the stored data (sums are always in f64).
+    #[arg(long, value_enum, default_value_t = PrecisionArg::F32)]
+    pub store_precision: PrecisionArg,
+    /// RBF kernel length scale.
+    #[arg(long, default_value_t = DEFAULT_LENGTH_SCALE, allow_negative_numbers = true)]
     pub length_scale: f64,
-    /// Noise on the kernel diagonal.
+    /// Noise added to the kernel diagonal.
+    #[arg(long, default_value_t = DEFAULT_NOISE, allow_negative_numbers = true)]
     pub noise: f64,
-    /// Hooke-Jeeves' stopping step.
+    /// Hooke-Jeeves stops when its step falls below this.
+    #[arg(long, default_value_t = DEFAULT_MIN_STEP, allow_negative_numbers = true)]
     pub min_step: f64,
+}
+
+/// `--q`'s help, with the bound the fit checks ([`MAX_Q`]).
+fn q_help() -> String {
+    format!(
+        "Latent dimension, 1 to {MAX_Q} (a map needs 2); must be smaller than the number of materials"
+    )
 }
 
 /// A finished fit: the library's report and what the summary adds.
@@ -49,36 +83,36 @@ pub struct Fitted {
 /// number of `.binary` files before the long store pass. A fit that fails
 /// after writing a new store removes it again, so a failed run leaves no
 /// store without a model.
-pub fn fit(options: &Options) -> Result<Fitted, Error> {
-    let params = GplvmParams::new(options.q)
-        .length_scale(options.length_scale)
-        .noise(options.noise)
-        .optimizer(options.optimizer)
-        .min_step(options.min_step)
+pub fn fit(args: &Args) -> Result<Fitted, Error> {
+    let params = GplvmParams::new(args.q)
+        .length_scale(args.length_scale)
+        .noise(args.noise)
+        .optimizer(args.optimizer.into())
+        .min_step(args.min_step)
         .check()?;
-    let n = count_binaries(&options.dir).unwrap_or(0);
-    if n > 0 && options.q >= n {
+    let n = count_binaries(&args.dir).unwrap_or(0);
+    if n > 0 && args.q >= n {
         return Err(Error::Input(format!(
             "{}: --q {} needs more materials than latent dimensions, found {n} .binary file{}",
-            options.dir.display(),
-            options.q,
+            args.dir.display(),
+            args.q,
             if n == 1 { "" } else { "s" }
         )));
     }
     let fit_options = FitOptions {
         params,
-        transform: options.transform,
-        precision: options.precision,
+        transform: args.transform.into(),
+        precision: args.store_precision.into(),
     };
-    let store_path = store_path_for(&options.model);
+    let store_path = store_path_for(&args.model);
     let store_existed = store_path.exists();
-    let bars = Bars::new(format!("opening {}", options.dir.display()));
-    let result = fit_dir(&options.dir, &options.model, &fit_options, &bars);
+    let bars = Bars::new(format!("opening {}", args.dir.display()));
+    let result = fit_dir(&args.dir, &args.model, &fit_options, &bars);
     drop(bars);
     let report = match result {
         Ok(report) => report,
         Err(e) => {
-            if !store_existed && !options.model.exists() {
+            if !store_existed && !args.model.exists() {
                 // Best effort: the error below is what matters.
                 let _ = std::fs::remove_file(&store_path);
             }
@@ -103,17 +137,17 @@ fn count_binaries(dir: &Path) -> Option<usize> {
 }
 
 /// Run `fit`: warnings for ignored entries, then the summary.
-pub fn run(options: &Options) -> Result<ExitCode, Error> {
-    let fitted = fit(options)?;
+pub fn run(args: &Args) -> Result<ExitCode, Error> {
+    let fitted = fit(args)?;
     for (path, why) in &fitted.report.ignored {
         eprintln!("warning: {}: ignored ({why})", path.display());
     }
-    write_summary(&mut io::stdout().lock(), options, &fitted)?;
+    write_summary(&mut io::stdout().lock(), args, &fitted)?;
     Ok(ExitCode::SUCCESS)
 }
 
 /// The closing summary: data, model, cost, search, numerics, times.
-pub fn write_summary(out: &mut impl Write, options: &Options, fitted: &Fitted) -> io::Result<()> {
+pub fn write_summary(out: &mut impl Write, args: &Args, fitted: &Fitted) -> io::Result<()> {
     let (r, store) = (&fitted.report, &fitted.store);
     let o = &r.fit.outcome;
     let k = r.fit.kernel;
@@ -123,7 +157,7 @@ pub fn write_summary(out: &mut impl Write, options: &Options, fitted: &Fitted) -
         r.names.len(),
         store.dims(),
         store.rows(),
-        options.dir.display(),
+        args.dir.display(),
         r.model_path.display()
     )?;
     writeln!(
@@ -176,45 +210,4 @@ pub fn write_summary(out: &mut impl Write, options: &Options, fitted: &Fitted) -
         secs(r.save_time),
         secs(total)
     )
-}
-
-/// A cost in a fixed width of significant digits.
-fn cost(v: f64) -> String {
-    if v != 0.0 && (v.abs() >= 1e7 || v.abs() < 1e-2) {
-        format!("{v:.6e}")
-    } else {
-        format!("{v:.4}")
-    }
-}
-
-/// `0.123 s`.
-pub fn secs(t: Duration) -> String {
-    format!("{:.3} s", t.as_secs_f64())
-}
-
-/// `35.0 MB`, `1.75 GB`.
-pub fn size(bytes: u64) -> String {
-    let b = bytes as f64;
-    if b >= 1e9 {
-        format!("{:.2} GB", b / 1e9)
-    } else if b >= 1e6 {
-        format!("{:.1} MB", b / 1e6)
-    } else {
-        format!("{:.1} kB", b / 1e3)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn sizes_and_costs_read_well() {
-        assert_eq!(size(34_992_012), "35.0 MB");
-        assert_eq!(size(1_749_600_064), "1.75 GB");
-        assert_eq!(size(12_345), "12.3 kB");
-        assert_eq!(cost(-1234.56789), "-1234.5679");
-        assert_eq!(cost(-2.5e8), "-2.500000e8");
-        assert_eq!(secs(Duration::from_millis(1500)), "1.500 s");
-    }
 }

@@ -6,35 +6,45 @@ use std::io::{self, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use brdf_atlas_core::{Model, OptimizerKind, Precision, TransformKind};
+use brdf_atlas_core::Model;
 use brdf_merl::Dims;
 
+use super::info::{self, Summary};
+use super::{fit, map, reconstruct, report, synth};
+use crate::args::{OptimizerArg, PrecisionArg, TransformArg};
 use crate::error::Error;
-use crate::info::{self, Summary};
-use crate::{fit, map, reconstruct, report, synth};
-
-/// Where the demo works and how big it is.
-#[derive(Debug, Clone)]
-pub struct Options {
-    /// Working directory; the MERL files go to `dir/merl/`.
-    pub dir: PathBuf,
-    /// Number of materials to synthesise.
-    pub count: usize,
-}
-
-/// Seed of the demo's database: the demo always shows the same materials.
-const SEED: u64 = 1;
+use crate::format::{secs, size};
 
 /// Materials synthesised when `--count` is not given: enough for a map
 /// with some structure, few enough that the demo takes seconds.
 pub const DEFAULT_COUNT: u32 = 16;
 
+/// Show brdf-atlas at work on its embedded synthetic database, no download needed.
+///
+/// Synthesises materials at the full MERL resolution into DIR/merl/,
+/// summarises them (name and albedo), fits a latent space to them
+/// (DIR/model.atlas), draws its map (DIR/map.png, .json, .exr) and
+/// writes a new material between the first two (DIR/reconstructed.binary).
+/// Needs about 35 MB of disk per material, and as much again for the model.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Working directory for everything the demo writes.
+    #[arg(long, default_value = "brdf-atlas-demo")]
+    pub dir: PathBuf,
+    /// Number of materials to synthesise (a 2-D map needs at least 3).
+    #[arg(long, default_value_t = DEFAULT_COUNT, value_parser = clap::value_parser!(u32).range(3..=synth::MAX_COUNT))]
+    pub count: u32,
+}
+
+/// Seed of the demo's database: the demo always shows the same materials.
+const SEED: u64 = 1;
+
 /// Width and height of the demo's map.
-const MAP_SIZE: usize = 512;
+const MAP_SIZE: u32 = 512;
 
 /// What the steps share.
 struct State<'a> {
-    options: &'a Options,
+    args: &'a Args,
     /// MERL files of the database, in database order (set by [`synthesise`]).
     materials: Vec<PathBuf>,
     /// Their summaries (set by [`summarise`]).
@@ -62,9 +72,9 @@ const STEPS: &[Step] = &[
 ];
 
 /// Run every step, announcing each, then say where everything went.
-pub fn run(options: &Options) -> Result<ExitCode, Error> {
+pub fn run(args: &Args) -> Result<ExitCode, Error> {
     let mut state = State {
-        options,
+        args,
         materials: Vec::new(),
         summaries: Vec::new(),
         model: None,
@@ -74,7 +84,7 @@ pub fn run(options: &Options) -> Result<ExitCode, Error> {
         writeln!(io::stdout(), "[{}/{}] {title}", i + 1, STEPS.len())?;
         step(&mut state)?;
     }
-    let dir = &options.dir;
+    let dir = &args.dir;
     let mut out = io::stdout().lock();
     writeln!(out, "\nDone. In {}:", dir.display())?;
     writeln!(
@@ -88,7 +98,7 @@ pub fn run(options: &Options) -> Result<ExitCode, Error> {
         writeln!(
             out,
             "  {MODEL:<22}the fitted latent space (its data in {MODEL}.store, {})",
-            fit::size(model.store().len_bytes())
+            size(model.store().len_bytes())
         )?;
     }
     writeln!(
@@ -128,24 +138,24 @@ fn indented(write: impl FnOnce(&mut Vec<u8>) -> Result<(), Error>) -> Result<(),
     Ok(())
 }
 
-fn merl_dir(options: &Options) -> PathBuf {
-    options.dir.join("merl")
+fn merl_dir(args: &Args) -> PathBuf {
+    args.dir.join("merl")
 }
 
 /// Write the synthetic database at full MERL resolution.
 fn synthesise(state: &mut State) -> Result<(), Error> {
-    let options = synth::Options {
-        count: state.options.count,
+    let args = synth::Args {
+        count: state.args.count,
         dims: Dims::MERL,
         seed: SEED,
-        out_dir: merl_dir(state.options),
+        out_dir: merl_dir(state.args),
     };
-    state.materials = synth::write_database(&options)?;
+    state.materials = synth::write_database(&args)?;
     writeln!(
         io::stdout(),
         "      wrote {} materials to {}",
         state.materials.len(),
-        options.out_dir.display()
+        args.out_dir.display()
     )?;
     Ok(())
 }
@@ -162,39 +172,39 @@ fn summarise(state: &mut State) -> Result<(), Error> {
 
 /// Fit the database with the default settings and the log transform.
 fn fit_model(state: &mut State) -> Result<(), Error> {
-    let options = fit::Options {
-        dir: merl_dir(state.options),
-        model: state.options.dir.join(MODEL),
+    let args = fit::Args {
+        dir: merl_dir(state.args),
+        model: state.args.dir.join(MODEL),
         q: 2,
-        transform: TransformKind::Log,
-        optimizer: OptimizerKind::HookeJeeves,
-        precision: Precision::F32,
-        length_scale: 1.0,
-        noise: 1e-4,
-        min_step: 1e-3,
+        transform: TransformArg::Log,
+        optimizer: OptimizerArg::HookeJeeves,
+        store_precision: PrecisionArg::F32,
+        length_scale: fit::DEFAULT_LENGTH_SCALE,
+        noise: fit::DEFAULT_NOISE,
+        min_step: fit::DEFAULT_MIN_STEP,
     };
-    let fitted = fit::fit(&options)?;
-    indented(|out| Ok(fit::write_summary(out, &options, &fitted)?))?;
-    state.model = Some(Model::open(&options.model)?);
+    let fitted = fit::fit(&args)?;
+    indented(|out| Ok(fit::write_summary(out, &args, &fitted)?))?;
+    state.model = Some(Model::open(&args.model)?);
     Ok(())
 }
 
 /// The map, at a modest size, with every output.
 fn draw_map(state: &mut State) -> Result<(), Error> {
     let model = state.model.as_ref().expect("the fit step ran");
-    let dir = &state.options.dir;
-    let options = map::Options {
+    let dir = &state.args.dir;
+    let args = map::Args {
         model: model.path().to_path_buf(),
         png: dir.join(MAP_PNG),
         exr: Some(dir.join(MAP_EXR)),
         json: Some(dir.join(MAP_JSON)),
         size: MAP_SIZE,
-        contours: 12,
+        contours: map::DEFAULT_CONTOURS,
         samples: None,
         view: None,
-        labels: true,
+        no_labels: false,
     };
-    indented(|out| map::draw(model, &options, out))
+    indented(|out| map::draw(model, &args, out))
 }
 
 /// A new material at the midpoint of the first two materials' latent points.
@@ -204,7 +214,7 @@ fn reconstruct_between(state: &mut State) -> Result<(), Error> {
     let x: Vec<f64> = (0..model.q())
         .map(|c| 0.5 * (latent[(0, c)] + latent[(1, c)]))
         .collect();
-    let out = state.options.dir.join(RECONSTRUCTED);
+    let out = state.args.dir.join(RECONSTRUCTED);
     indented(|report| reconstruct::write(model, &x, &out, report))?;
     state.between = Some((model.names()[0].clone(), model.names()[1].clone()));
     Ok(())
@@ -213,20 +223,20 @@ fn reconstruct_between(state: &mut State) -> Result<(), Error> {
 /// A quick report on the demo's database (leave-one-out errors for q = 1..3,
 /// optimisers, map accuracy, store precision).
 fn write_report(state: &mut State) -> Result<(), Error> {
-    let options = report::Options {
-        dir: merl_dir(state.options),
-        out: state.options.dir.join(REPORT),
-        q_max: report::QUICK_Q_MAX,
+    let args = report::Args {
+        dir: merl_dir(state.args),
+        out: state.args.dir.join(REPORT),
+        q_max: None,
         quick: true,
-        optimizer: OptimizerKind::Lbfgs,
+        optimizer: OptimizerArg::Lbfgs,
     };
     let mut sink = Vec::new();
-    let summary = report::write(&options, &mut sink)?;
+    let summary = report::write(&args, &mut sink)?;
     writeln!(
         io::stdout(),
         "      wrote {} in {}",
         summary.report.display(),
-        fit::secs(summary.total)
+        secs(summary.total)
     )?;
     Ok(())
 }

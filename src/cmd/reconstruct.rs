@@ -9,18 +9,23 @@ use brdf_atlas_core::Model;
 use brdf_merl::Dims;
 use brdf_merl::table::HEADER_BYTES;
 
-use crate::coords::Point;
+use crate::args::ModelPoint;
 use crate::error::Error;
-use crate::fit::{secs, size};
+use crate::format::{point, secs, size};
 
-/// Which model, where in it, and where the table goes.
-#[derive(Debug, Clone)]
-pub struct Options {
-    /// Model file.
-    pub model: PathBuf,
-    /// Latent point.
-    pub at: Point,
-    /// MERL file to write.
+/// Write the material at a latent point as a MERL file.
+///
+/// The new material is the blend of the model's materials that the GPLVM
+/// predicts at the point (values clamped to >= 0; bins no input measured
+/// stay marked unmeasured). Prints the largest blend weights. The file
+/// has the model's dims (90x90x180 for MERL data) and opens in BRDF
+/// Explorer.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    #[command(flatten)]
+    pub target: ModelPoint,
+    /// MERL `.binary` file to write.
+    #[arg(short = 'o', long = "output", value_name = "OUT")]
     pub out: PathBuf,
 }
 
@@ -44,7 +49,7 @@ pub fn write(model: &Model, x: &[f64], out: &Path, report: &mut impl Write) -> R
     writeln!(
         report,
         "at {} in {}: largest blend weights",
-        Point::show(x),
+        point(x),
         model.path().display()
     )?;
     for (i, w) in contributors(weights).into_iter().take(3) {
@@ -76,10 +81,9 @@ pub fn write(model: &Model, x: &[f64], out: &Path, report: &mut impl Write) -> R
 }
 
 /// Run `reconstruct`.
-pub fn run(options: &Options) -> Result<ExitCode, Error> {
-    let model = Model::open(&options.model)?;
-    let x = options.at.check(model.q(), &options.model)?;
-    write(&model, x, &options.out, &mut io::stdout().lock())?;
+pub fn run(args: &Args) -> Result<ExitCode, Error> {
+    let (model, x) = args.target.open()?;
+    write(&model, x, &args.out, &mut io::stdout().lock())?;
     Ok(ExitCode::SUCCESS)
 }
 

@@ -1,10 +1,14 @@
-//! Parsing comma-separated numbers: latent points (`--at`), directions as
-//! angles in degrees (`--wi`, `--wo`) and view windows (`--view`).
+//! Argument values several commands share: comma-separated numbers
+//! (latent points `--at`, directions as angles in degrees `--wi`/`--wo`,
+//! view windows `--view`, table dims `--dims`) and the choices of
+//! `--transform`, `--optimizer` and `--store-precision`.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use brdf_atlas_core::View;
-use brdf_merl::Vec3;
+use brdf_atlas_core::{Model, View};
+use brdf_atlas_core::{OptimizerKind, Precision, TransformKind};
+use brdf_merl::{Dims, Vec3};
+use clap::ValueEnum;
 
 use crate::error::Error;
 
@@ -55,11 +59,26 @@ impl Point {
             )
         }))
     }
+}
 
-    /// `(0.3000, -0.5000)`, for reports.
-    pub fn show(x: &[f64]) -> String {
-        let parts: Vec<String> = x.iter().map(|v| format!("{v:.4}")).collect();
-        format!("({})", parts.join(", "))
+/// A model and a latent point in it: the first arguments of `reconstruct`
+/// and `eval`.
+#[derive(Debug, clap::Args)]
+pub struct ModelPoint {
+    /// Model file written by `fit`.
+    #[arg(value_name = "MODEL")]
+    pub model: PathBuf,
+    /// Latent point, x,y (q numbers for a q-dimensional model).
+    #[arg(long, value_name = "X,Y", value_parser = point, allow_hyphen_values = true)]
+    pub at: Point,
+}
+
+impl ModelPoint {
+    /// Open the model and check the point against it.
+    pub fn open(&self) -> Result<(Model, &[f64]), Error> {
+        let model = Model::open(&self.model)?;
+        let x = self.at.check(model.q(), &self.model)?;
+        Ok((model, x))
     }
 }
 
@@ -93,16 +112,96 @@ pub fn angles(text: &str) -> Result<Angles, String> {
 
 /// Parse `x0,x1,y0,y1` into a checked [`View`].
 pub fn view(text: &str) -> Result<View, String> {
-    const EXPECTED: &str =
-        "--view expects four numbers x0,x1,y0,y1 with x0 < x1 and y0 < y1, like -1.1,1.1,-1.1,1.1";
+    let expected = || {
+        format!(
+            "--view expects four numbers x0,x1,y0,y1 with x0 < x1 and y0 < y1, like {}, got {text:?}",
+            default_view()
+        )
+    };
     match numbers(text).as_deref() {
         Some(&[x0, x1, y0, y1]) => {
             let v = View { x0, x1, y0, y1 };
-            v.check()
-                .map(|()| v)
-                .map_err(|_| format!("{EXPECTED}, got {text:?}"))
+            v.check().map(|()| v).map_err(|_| expected())
         }
-        _ => Err(format!("{EXPECTED}, got {text:?}")),
+        _ => Err(expected()),
+    }
+}
+
+/// The default view as `--view` takes it: `-1.1,1.1,-1.1,1.1`.
+pub fn default_view() -> String {
+    let View { x0, x1, y0, y1 } = View::default();
+    format!("{x0},{x1},{y0},{y1}")
+}
+
+/// What every bad `--dims` value is told.
+const DIMS_EXPECTED: &str = "--dims expects three positive integers like 90,90,180";
+
+/// Parse `n_theta_h,n_theta_d,n_phi_d` into checked [`Dims`].
+pub fn dims(text: &str) -> Result<Dims, String> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let [a, b, c] = parts[..] else {
+        return Err(format!("{DIMS_EXPECTED}, got {} value(s)", parts.len()));
+    };
+    let num = |s: &str| {
+        s.parse::<usize>()
+            .ok()
+            .filter(|&n| n > 0)
+            .ok_or_else(|| format!("{DIMS_EXPECTED}, got {s:?}"))
+    };
+    Dims::new(num(a)?, num(b)?, num(c)?).map_err(|e| format!("{DIMS_EXPECTED}: {e}"))
+}
+
+/// `--transform` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum TransformArg {
+    /// The reflectance itself (1/sr).
+    Raw,
+    /// log(1 + f cos_i cos_o): highlights weigh less.
+    Log,
+}
+
+impl From<TransformArg> for TransformKind {
+    fn from(t: TransformArg) -> Self {
+        match t {
+            TransformArg::Raw => TransformKind::Raw,
+            TransformArg::Log => TransformKind::Log,
+        }
+    }
+}
+
+/// `--optimizer` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum OptimizerArg {
+    /// Direct search with O(N^2) rank-one updates per trial.
+    HookeJeeves,
+    /// Projected L-BFGS on the analytic gradient.
+    Lbfgs,
+}
+
+impl From<OptimizerArg> for OptimizerKind {
+    fn from(o: OptimizerArg) -> Self {
+        match o {
+            OptimizerArg::HookeJeeves => OptimizerKind::HookeJeeves,
+            OptimizerArg::Lbfgs => OptimizerKind::Lbfgs,
+        }
+    }
+}
+
+/// `--store-precision` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum PrecisionArg {
+    /// 4 bytes a value.
+    F32,
+    /// 8 bytes a value.
+    F64,
+}
+
+impl From<PrecisionArg> for Precision {
+    fn from(p: PrecisionArg) -> Self {
+        match p {
+            PrecisionArg::F32 => Precision::F32,
+            PrecisionArg::F64 => Precision::F64,
+        }
     }
 }
 
@@ -149,11 +248,38 @@ mod tests {
     fn views_are_ordered_windows() {
         let v = view("-1,1,-0.5,0.5").unwrap();
         assert_eq!((v.x0, v.x1, v.y0, v.y1), (-1.0, 1.0, -0.5, 0.5));
+        assert_eq!(default_view(), "-1.1,1.1,-1.1,1.1");
+        assert_eq!(view(&default_view()).unwrap(), View::default());
         for bad in ["1,-1,0,1", "0,1,0,0", "0,1,0", "a,b,c,d"] {
             assert!(
                 view(bad).unwrap_err().starts_with("--view expects"),
                 "{bad}"
             );
+        }
+    }
+
+    #[test]
+    fn accepts_three_positive_integers() {
+        assert_eq!(dims("90,90,180").unwrap(), Dims::MERL);
+        assert_eq!(dims(" 8, 8 ,16").unwrap(), Dims::new(8, 8, 16).unwrap());
+    }
+
+    #[test]
+    fn rejects_everything_else_with_the_expected_form() {
+        for bad in [
+            "",
+            "90,90",
+            "90,90,180,1",
+            "a,b,c",
+            "0,90,180",
+            "-1,90,180",
+            "90,90,1e3",
+            "90,,180",
+            "90,90,2000",
+        ] {
+            let err = dims(bad).unwrap_err();
+            assert!(err.starts_with(DIMS_EXPECTED), "{bad:?}: {err}");
+            assert!(!err.contains('\n'), "{err}");
         }
     }
 }

@@ -8,43 +8,77 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use brdf_atlas_core::Model;
+use brdf_atlas_core::limits::MAX_MAP_SIDE;
 use brdf_atlas_core::render::{self, Picture};
 use brdf_atlas_core::{AlbedoMethod, DEFAULT_SAMPLES, View};
 use brdf_merl::atomic::commit_all;
 
+use crate::args;
 use crate::error::Error;
-use crate::fit::secs;
+use crate::format::secs;
 use crate::progress::Bars;
 
-/// What to draw and where.
-#[derive(Debug, Clone)]
-pub struct Options {
-    /// Model file.
+/// `--contours` when not given.
+pub const DEFAULT_CONTOURS: u32 = 12;
+
+/// Draw the albedo map of a 2-D latent space.
+///
+/// Each pixel is a latent point coloured by the albedo of the material
+/// there; luminance contour lines and the model's materials (dots with
+/// names) are drawn on top. Writes an sRGB PNG, a JSON sidecar with the
+/// view window, the pixel <-> latent mapping and the material points,
+/// and on request a linear float EXR. For a `raw` model the albedo is
+/// blended exactly from the materials' albedos; for `log` each pixel is
+/// integrated from quadrature samples (--samples, default 256).
+#[derive(Debug, Clone, clap::Args)]
+pub struct Args {
+    /// Model file written by `fit` (q = 2).
+    #[arg(value_name = "MODEL")]
     pub model: PathBuf,
     /// PNG to write.
+    #[arg(short = 'o', long = "output", value_name = "PNG")]
     pub png: PathBuf,
-    /// Float EXR to write, if any.
+    /// Also write the linear albedo as a float OpenEXR.
+    #[arg(long, value_name = "EXR")]
     pub exr: Option<PathBuf>,
-    /// Sidecar; `None` means the PNG path with `.json`.
+    /// JSON sidecar to write [default: the PNG path with .json].
+    #[arg(long, value_name = "JSON")]
     pub json: Option<PathBuf>,
     /// Width and height in pixels.
-    pub size: usize,
+    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..=MAX_MAP_SIDE as i64))]
+    pub size: u32,
     /// Number of luminance contour lines.
-    pub contours: usize,
-    /// Quadrature samples per pixel; `None` picks by the model's transform.
-    pub samples: Option<usize>,
-    /// Latent window; `None` is the box `[-1, 1]^2` plus a margin.
+    #[arg(long, default_value_t = DEFAULT_CONTOURS, value_parser = clap::value_parser!(u32).range(0..=1000))]
+    pub contours: u32,
+    #[arg(long, value_name = "S", help = samples_help(), value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    pub samples: Option<u32>,
+    #[arg(long, value_name = "X0,X1,Y0,Y1", help = view_help(), value_parser = args::view, allow_hyphen_values = true)]
     pub view: Option<View>,
-    /// Write material names beside their points.
-    pub labels: bool,
+    /// Do not write material names beside their points.
+    #[arg(long)]
+    pub no_labels: bool,
+}
+
+/// `--samples`' help, with the core's default.
+fn samples_help() -> String {
+    format!(
+        "Quadrature samples per pixel (any model); without it, none for raw, {DEFAULT_SAMPLES} for log"
+    )
+}
+
+/// `--view`'s help, with the core's default view.
+fn view_help() -> String {
+    format!(
+        "Latent window x0,x1,y0,y1 [default: {}]",
+        args::default_view()
+    )
 }
 
 /// The sidecar path: as given, or the PNG's with `.json`.
-pub fn json_path(options: &Options) -> PathBuf {
-    options
-        .json
+pub fn json_path(args: &Args) -> PathBuf {
+    args.json
         .clone()
-        .unwrap_or_else(|| options.png.with_extension("json"))
+        .unwrap_or_else(|| args.png.with_extension("json"))
 }
 
 /// The samples to use: as asked; else none (the exact linear shortcut) for
@@ -58,7 +92,7 @@ pub fn samples_for(model: &Model, asked: Option<usize>) -> Option<usize> {
 }
 
 /// Compute the map and write every output; report what was done.
-pub fn draw(model: &Model, options: &Options, report: &mut impl Write) -> Result<(), Error> {
+pub fn draw(model: &Model, args: &Args, report: &mut impl Write) -> Result<(), Error> {
     if model.q() != 2 {
         return Err(Error::Input(format!(
             "{}: a map needs a 2-D latent space, this model has q = {} (fit with --q 2)",
@@ -66,9 +100,9 @@ pub fn draw(model: &Model, options: &Options, report: &mut impl Write) -> Result
             model.q()
         )));
     }
-    let json = json_path(options);
-    let mut outputs = vec![&options.png, &json];
-    outputs.extend(&options.exr);
+    let json = json_path(args);
+    let mut outputs = vec![&args.png, &json];
+    outputs.extend(&args.exr);
     for (k, a) in outputs.iter().enumerate() {
         if outputs[..k].contains(a) {
             return Err(Error::Input(format!(
@@ -77,11 +111,12 @@ pub fn draw(model: &Model, options: &Options, report: &mut impl Write) -> Result
             )));
         }
     }
-    let view = options.view.unwrap_or_default();
-    let samples = samples_for(model, options.samples);
+    let view = args.view.unwrap_or_default();
+    let samples = samples_for(model, args.samples.map(|s| s as usize));
     let t0 = Instant::now();
     let bars = Bars::new("preparing the map");
-    let map = model.albedo_map(options.size, options.size, view, samples, &bars)?;
+    let size = args.size as usize;
+    let map = model.albedo_map(size, size, view, samples, &bars)?;
     drop(bars);
     let elapsed = t0.elapsed();
     let method = match map.method {
@@ -95,20 +130,18 @@ pub fn draw(model: &Model, options: &Options, report: &mut impl Write) -> Result
             model.file().transform.name()
         ),
     };
-    let picture = Picture::new(model, map, options.contours);
+    let picture = Picture::new(model, map, args.contours as usize);
     let sidecar = picture.sidecar(model.path());
     // Every output is complete on disk before any replaces an old one.
-    let mut staged = vec![render::stage_png(&options.png, &picture, options.labels)?];
-    if let Some(exr) = &options.exr {
+    let mut staged = vec![render::stage_png(&args.png, &picture, !args.no_labels)?];
+    if let Some(exr) = &args.exr {
         staged.push(render::stage_exr(exr, &picture.map)?);
     }
     staged.push(render::stage_sidecar(&json, &sidecar)?);
     commit_all(staged)?;
     writeln!(
         report,
-        "map {}x{} of {} over x {}..{}, y {}..{}: {method}, {}",
-        options.size,
-        options.size,
+        "map {size}x{size} of {} over x {}..{}, y {}..{}: {method}, {}",
         model.path().display(),
         view.x0,
         view.x1,
@@ -123,8 +156,8 @@ pub fn draw(model: &Model, options: &Options, report: &mut impl Write) -> Result
         picture.levels.len(),
         picture.references.len()
     )?;
-    writeln!(report, "  wrote {} (sRGB)", options.png.display())?;
-    if let Some(exr) = &options.exr {
+    writeln!(report, "  wrote {} (sRGB)", args.png.display())?;
+    if let Some(exr) = &args.exr {
         writeln!(report, "  wrote {} (linear float RGB)", exr.display())?;
     }
     writeln!(
@@ -136,9 +169,9 @@ pub fn draw(model: &Model, options: &Options, report: &mut impl Write) -> Result
 }
 
 /// Run `map`.
-pub fn run(options: &Options) -> Result<ExitCode, Error> {
-    let model = Model::open(&options.model)?;
-    draw(&model, options, &mut io::stdout().lock())?;
+pub fn run(args: &Args) -> Result<ExitCode, Error> {
+    let model = Model::open(&args.model)?;
+    draw(&model, args, &mut io::stdout().lock())?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -149,7 +182,7 @@ mod tests {
 
     /// The default PNG sidecar next to `png`.
     fn default_json(png: &Path) -> PathBuf {
-        json_path(&Options {
+        json_path(&Args {
             model: PathBuf::new(),
             png: png.to_path_buf(),
             exr: None,
@@ -158,7 +191,7 @@ mod tests {
             contours: 0,
             samples: None,
             view: None,
-            labels: true,
+            no_labels: false,
         })
     }
 

@@ -1,0 +1,502 @@
+//! The report's measurements: stores, fits and leave-one-out errors per
+//! transform, the Hooke-Jeeves step sweep, f32 vs f64 stores, and the
+//! albedo map's accuracy and time. Work that depends only on (transform,
+//! precision) is done once: each store and its Gram matrix is built once
+//! and every fit and the leave-one-out pass of that transform reuse it.
+
+use std::io::Write;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use brdf_atlas_core::ModelFile;
+use brdf_atlas_core::loo::{self, Evaluation};
+use brdf_atlas_core::measure::{map_error, reference_albedo};
+use brdf_atlas_core::{AlbedoMethod, DEFAULT_SAMPLES, View};
+use brdf_atlas_core::{Dataset, build_store};
+use brdf_atlas_core::{
+    Fit, GplvmParams, GramData, Model, NoProgress, OptimizerKind, Precision, Store, TransformKind,
+};
+use brdf_merl::Quadrature;
+use faer::Mat;
+
+use super::plan::Plan;
+use crate::cmd::fit::DEFAULT_MIN_STEP;
+use crate::error::Error;
+use crate::progress::Bars;
+
+/// One fit of the latent points.
+pub struct FitRow {
+    pub transform: TransformKind,
+    pub q: usize,
+    pub optimizer: OptimizerKind,
+    pub min_step: f64,
+    pub time: Duration,
+    pub initial_cost: f64,
+    pub cost: f64,
+    pub evaluations: u64,
+}
+
+/// Leave-one-out errors of one method.
+pub struct LooRow {
+    pub transform: TransformKind,
+    /// `gplvm`, `gplvm-other` (the other optimiser) or `pca`.
+    pub method: &'static str,
+    pub q: usize,
+    /// Reflectance RMSE.
+    pub raw: f64,
+    /// Cosine-weighted log RMSE.
+    pub log: f64,
+    /// RMSE in the model's transformed space.
+    pub transformed: f64,
+    /// Per material: (reflectance RMSE, log RMSE).
+    pub materials: Vec<(f64, f64)>,
+    /// In-sample PCA RMSE in transformed space, from the discarded eigenvalues.
+    pub in_sample: Option<f64>,
+}
+
+/// Building one store.
+pub struct StoreRow {
+    pub transform: TransformKind,
+    pub precision: Precision,
+    pub time: Duration,
+    pub bytes: u64,
+}
+
+/// The f32 and f64 reconstruction of one latent point.
+pub struct PrecisionRow {
+    pub point: Vec<f64>,
+    pub max_abs: f64,
+    pub max_rel: f64,
+    pub rms: f64,
+    pub time32: Duration,
+    pub time64: Duration,
+}
+
+/// One sample count of the log map.
+pub struct SampleRow {
+    pub samples: usize,
+    pub bins: usize,
+    pub max_err: f64,
+    pub mean_err: f64,
+    pub time: Duration,
+}
+
+/// One map size.
+pub struct SizeRow {
+    pub method: String,
+    pub size: usize,
+    pub time: Duration,
+}
+
+/// Everything measured.
+#[derive(Default)]
+pub struct Results {
+    pub names: Vec<String>,
+    pub dims: String,
+    /// Values per material.
+    pub d: usize,
+    /// Opening and validating the files.
+    pub scan: Duration,
+    pub stores: Vec<StoreRow>,
+    pub fits: Vec<FitRow>,
+    pub loo: Vec<LooRow>,
+    /// Per transform: predictors of its leave-one-out pass, and its time.
+    pub loo_times: Vec<(TransformKind, usize, Duration)>,
+    pub scored_rows: usize,
+    /// Hooke-Jeeves' minimum step sweep.
+    pub sweep: Vec<FitRow>,
+    pub precision: Vec<PrecisionRow>,
+    pub gram_rel_diff: f64,
+    pub samples: Vec<SampleRow>,
+    pub reference_time: Duration,
+    pub reference_pixels: usize,
+    pub sizes: Vec<SizeRow>,
+}
+
+impl Results {
+    /// The leave-one-out row of `method` at `q` for transform `t`.
+    pub fn loo_row(&self, t: TransformKind, method: &str, q: usize) -> Option<&LooRow> {
+        self.loo
+            .iter()
+            .find(|l| l.transform == t && l.method == method && l.q == q)
+    }
+}
+
+/// Progress lines, `[   12.3 s] what`, timed from the start of the run.
+pub struct Steps<'a> {
+    start: Instant,
+    out: &'a mut dyn Write,
+}
+
+impl<'a> Steps<'a> {
+    /// Lines to `out`, timed from `start`.
+    pub fn new(start: Instant, out: &'a mut dyn Write) -> Steps<'a> {
+        Steps { start, out }
+    }
+
+    /// Announce the next step.
+    pub fn say(&mut self, text: &str) -> Result<(), Error> {
+        let t = self.start.elapsed().as_secs_f64();
+        writeln!(self.out, "[{t:7.1} s] {text}")?;
+        Ok(())
+    }
+}
+
+/// One transform's f32 store, its Gram data, and its q = 2 Hooke-Jeeves fit
+/// when the plan made one.
+struct Transformed {
+    store: Store,
+    gram: GramData,
+    y: Mat<f64>,
+    kept: Option<Fit>,
+}
+
+/// Run every measurement of `plan` on `data`, building stores and model
+/// files in `work`, and add the results to `r`.
+pub fn measure(
+    data: &Dataset,
+    plan: &Plan,
+    work: &Path,
+    steps: &mut Steps,
+    r: &mut Results,
+) -> Result<(), Error> {
+    let log = per_transform(data, TransformKind::Log, plan, work, steps, r)?;
+    let raw = per_transform(data, TransformKind::Raw, plan, work, steps, r)?;
+
+    // Store precision: the log store again in f64, the same latent points.
+    steps.say("log transform: f64 store, f32 vs f64 reconstructions")?;
+    let (store64, _, y64) = build(data, TransformKind::Log, Precision::F64, work, r)?;
+    r.gram_rel_diff = (&log.y - &y64).norm_max() / log.y.norm_max();
+    let models = match (&log.kept, &raw.kept) {
+        (Some(lf), Some(rf)) => {
+            let log_model = model_file(work, "log-f32", data, lf, &log.store, &log.y, &log.gram)?;
+            let log64 = model_file(work, "log-f64", data, lf, &store64, &log.y, &log.gram)?;
+            let raw_model = model_file(work, "raw-f32", data, rf, &raw.store, &raw.y, &raw.gram)?;
+            compare_precision(&log_model, &log64, plan, r)?;
+            Some((log_model, raw_model))
+        }
+        _ => None,
+    };
+    drop(store64);
+
+    if let Some((log_model, raw_model)) = &models {
+        steps.say("albedo map: sample count vs error vs time")?;
+        map_samples(log_model, plan, r)?;
+        steps.say("albedo map: size vs time")?;
+        map_sizes(log_model, raw_model, plan, r)?;
+    }
+    Ok(())
+}
+
+/// One transform: its store, the fits for q = 1..Q (and q = 2 by the other
+/// optimiser), the leave-one-out pass of those fits and of PCA, and for
+/// the log transform Hooke-Jeeves' minimum step sweep.
+fn per_transform(
+    data: &Dataset,
+    transform: TransformKind,
+    plan: &Plan,
+    work: &Path,
+    steps: &mut Steps,
+    r: &mut Results,
+) -> Result<Transformed, Error> {
+    let name = transform.name();
+    steps.say(&format!("{name} transform: store and Gram matrix"))?;
+    let (store, gram, y) = build(data, transform, Precision::F32, work, r)?;
+    steps.say(&format!("{name} transform: fits for q = 1..{}", plan.q_max))?;
+    let mut runs: Vec<(&'static str, usize, OptimizerKind)> = (1..=plan.q_max)
+        .map(|q| ("gplvm", q, plan.optimizer))
+        .collect();
+    if plan.q_max >= 2 {
+        runs.push(("gplvm-other", 2, plan.other_optimizer()));
+    }
+    let mut predictors = Vec::new();
+    let mut labels = Vec::new();
+    let mut kept = None;
+    for (method, q, optimizer) in runs {
+        let (fit, row) = fit(&gram, transform, q, optimizer, DEFAULT_MIN_STEP)?;
+        predictors.push(loo::gp_predictor(
+            &fit.kernel,
+            fit.outcome.latent.as_ref(),
+            true,
+        )?);
+        labels.push((method, q));
+        r.fits.push(row);
+        if q == 2 && optimizer == OptimizerKind::HookeJeeves {
+            kept = Some(fit);
+        }
+    }
+    for q in 1..=plan.q_max {
+        predictors.push(loo::pca_predictor(y.as_ref(), q)?);
+        labels.push(("pca", q));
+    }
+    steps.say(&format!(
+        "{name} transform: leave-one-out pass ({} predictors over {} values)",
+        predictors.len(),
+        store.rows()
+    ))?;
+    let bars = Bars::new("leave-one-out");
+    let t = Instant::now();
+    let ev = loo::evaluate(&store, &predictors, &bars)?;
+    r.loo_times.push((transform, predictors.len(), t.elapsed()));
+    drop(bars);
+    record_loo(r, transform, &labels, &ev, y.as_ref())?;
+    if transform == TransformKind::Log {
+        steps.say("log transform: Hooke-Jeeves minimum step sweep (q = 2)")?;
+        if plan.q_max >= 2 {
+            for &m in &plan.min_steps {
+                r.sweep
+                    .push(fit(&gram, transform, 2, OptimizerKind::HookeJeeves, m)?.1);
+            }
+        }
+    }
+    Ok(Transformed {
+        store,
+        gram,
+        y,
+        kept,
+    })
+}
+
+/// Median wall time of `f`: once, or three times when one run is short and `repeat`.
+fn timed<T>(repeat: bool, mut f: impl FnMut() -> Result<T, Error>) -> Result<(T, Duration), Error> {
+    let t = Instant::now();
+    let v = f()?;
+    let first = t.elapsed();
+    if !repeat || first > Duration::from_millis(700) {
+        return Ok((v, first));
+    }
+    let mut times = vec![first];
+    for _ in 0..2 {
+        let t = Instant::now();
+        f()?;
+        times.push(t.elapsed());
+    }
+    times.sort();
+    Ok((v, times[1]))
+}
+
+/// Build one store (timed) and its normalised Gram data.
+fn build(
+    data: &Dataset,
+    transform: TransformKind,
+    precision: Precision,
+    work: &Path,
+    r: &mut Results,
+) -> Result<(Store, GramData, Mat<f64>), Error> {
+    let path = work.join(format!("{}-{}.store", transform.name(), precision.name()));
+    let bars = Bars::new("store");
+    let t = Instant::now();
+    let (store, y) = build_store(data, transform, precision, &path, &bars)?;
+    r.stores.push(StoreRow {
+        transform,
+        precision,
+        time: t.elapsed(),
+        bytes: store.len_bytes(),
+    });
+    let gram = GramData::new(y.clone(), store.rows())?;
+    Ok((store, gram, y))
+}
+
+/// One fit from the shared Gram data, timed (the optimiser only).
+fn fit(
+    gram: &GramData,
+    transform: TransformKind,
+    q: usize,
+    optimizer: OptimizerKind,
+    min_step: f64,
+) -> Result<(Fit, FitRow), Error> {
+    let params = GplvmParams::new(q)
+        .optimizer(optimizer)
+        .min_step(min_step)
+        .initial_step(0.25f64.max(min_step))
+        .check()?;
+    let t = Instant::now();
+    let fit = params.fit(gram, &NoProgress)?;
+    let time = t.elapsed();
+    let row = FitRow {
+        transform,
+        q,
+        optimizer,
+        min_step,
+        time,
+        initial_cost: fit.outcome.initial_cost,
+        cost: fit.outcome.cost,
+        evaluations: fit.outcome.evaluations,
+    };
+    Ok((fit, row))
+}
+
+/// The errors of one leave-one-out pass, a row per predictor (`labels`).
+fn record_loo(
+    r: &mut Results,
+    transform: TransformKind,
+    labels: &[(&'static str, usize)],
+    ev: &Evaluation,
+    y: faer::MatRef<'_, f64>,
+) -> Result<(), Error> {
+    let n = r.names.len();
+    r.scored_rows = ev.scored_rows;
+    for (&(method, q), e) in labels.iter().zip(&ev.errors) {
+        let in_sample = if method == "pca" {
+            Some((loo::discarded(y, q)? / (n * ev.rows) as f64).sqrt())
+        } else {
+            None
+        };
+        r.loo.push(LooRow {
+            transform,
+            method,
+            q,
+            raw: e.raw_total(ev.scored_rows),
+            log: e.log_total(ev.scored_rows),
+            transformed: (e.transformed.iter().sum::<f64>() / (n * ev.rows) as f64).sqrt(),
+            materials: (0..n)
+                .map(|i| (e.raw_rmse(i, ev.scored_rows), e.log_rmse(i, ev.scored_rows)))
+                .collect(),
+            in_sample,
+        });
+    }
+    Ok(())
+}
+
+/// Write a model file for `fit` on `store` into `work` and open it.
+fn model_file(
+    work: &Path,
+    name: &str,
+    data: &Dataset,
+    fit: &Fit,
+    store: &Store,
+    y: &Mat<f64>,
+    gram: &GramData,
+) -> Result<Model, Error> {
+    let path = work.join(format!("{name}.atlas"));
+    let store_name = store
+        .path()
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let rows = (0..y.nrows())
+        .map(|i| (0..y.ncols()).map(|j| y[(i, j)]).collect())
+        .collect();
+    let file = ModelFile::new(data.names.clone(), fit, store, rows, gram, store_name);
+    Model::write_file(&path, &file)?;
+    Ok(Model::open(&path)?)
+}
+
+/// Latent points for the precision comparison: materials and midpoints.
+fn probe_points(model: &Model, count: usize) -> Vec<Vec<f64>> {
+    let x = model.latent();
+    let n = x.nrows();
+    (0..count)
+        .map(|k| {
+            let (a, b) = ((2 * k) % n, (2 * k + 1) % n);
+            (0..x.ncols())
+                .map(|c| {
+                    if k % 2 == 0 {
+                        x[(a, c)]
+                    } else {
+                        0.5 * (x[(a, c)] + x[(b, c)])
+                    }
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Full reconstructions from the f32 and the f64 store at the same points.
+fn compare_precision(m32: &Model, m64: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error> {
+    for x in probe_points(m32, plan.points) {
+        let (a, time32) = timed(plan.repeat, || Ok(m32.at(&x)?.table()))?;
+        let (b, time64) = timed(plan.repeat, || Ok(m64.at(&x)?.table()))?;
+        let dims = a.dims();
+        let (mut max_abs, mut peak, mut sum2, mut count) = (0.0f64, 0.0f64, 0.0f64, 0usize);
+        for c in 0..3 {
+            for bin in 0..dims.bins() {
+                if let (Some(u), Some(v)) = (a.value(c, bin), b.value(c, bin)) {
+                    let d = (u - v).abs();
+                    max_abs = max_abs.max(d);
+                    peak = peak.max(v.abs());
+                    sum2 += d * d;
+                    count += 1;
+                }
+            }
+        }
+        r.precision.push(PrecisionRow {
+            point: x,
+            max_abs,
+            max_rel: max_abs / peak.max(f64::MIN_POSITIVE),
+            rms: (sum2 / count.max(1) as f64).sqrt(),
+            time32,
+            time64,
+        });
+    }
+    Ok(())
+}
+
+/// The log map's error (against dense references on a small grid) and
+/// time for each sample count.
+fn map_samples(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error> {
+    let view = View::default();
+    let w = 4 * plan.grid;
+    let pixels: Vec<(usize, usize)> = (0..plan.grid)
+        .flat_map(|a| (0..plan.grid).map(move |b| (2 + 4 * a, 2 + 4 * b)))
+        .collect();
+    let dense = Quadrature::dense(model.dims(), 1);
+    let t = Instant::now();
+    let reference = pixels
+        .iter()
+        .map(|&(px, py)| {
+            reference_albedo(
+                model,
+                &view.pixel_to_latent(px as f64, py as f64, w, w),
+                &dense,
+            )
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    r.reference_time = t.elapsed();
+    r.reference_pixels = pixels.len();
+    let bars = Bars::new("map sample counts");
+    for &s in &plan.samples {
+        let small = model.albedo_map(w, w, view, Some(s), &NoProgress)?;
+        let (max_err, mean_err) = map_error(&small, &pixels, &reference);
+        let size = plan.timed_size;
+        let (map, time) = timed(plan.repeat, || {
+            Ok(model.albedo_map(size, size, view, Some(s), &bars)?)
+        })?;
+        let bins = match map.method {
+            AlbedoMethod::Quadrature { bins, .. } => bins,
+            AlbedoMethod::Linear => 0,
+        };
+        r.samples.push(SampleRow {
+            samples: s,
+            bins,
+            max_err,
+            mean_err,
+            time,
+        });
+    }
+    Ok(())
+}
+
+/// The time of a map of each size, log (default samples) and raw (linear).
+fn map_sizes(log: &Model, raw: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error> {
+    let view = View::default();
+    for &s in &plan.sizes {
+        let (_, t) = timed(plan.repeat, || {
+            Ok(log.albedo_map(s, s, view, Some(DEFAULT_SAMPLES), &NoProgress)?)
+        })?;
+        r.sizes.push(SizeRow {
+            method: format!("log, {DEFAULT_SAMPLES} samples"),
+            size: s,
+            time: t,
+        });
+        let (_, t) = timed(plan.repeat, || {
+            Ok(raw.albedo_map(s, s, view, None, &NoProgress)?)
+        })?;
+        r.sizes.push(SizeRow {
+            method: "raw, linear".into(),
+            size: s,
+            time: t,
+        });
+    }
+    Ok(())
+}

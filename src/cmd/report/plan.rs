@@ -1,0 +1,90 @@
+//! What the report runs: the settings each part sweeps, from the command's
+//! arguments and the number of materials.
+
+use brdf_atlas_core::OptimizerKind;
+
+use super::Args;
+
+/// Default `--q-max`.
+pub const DEFAULT_Q_MAX: usize = 8;
+/// `--q-max` under `--quick` when not given.
+pub const QUICK_Q_MAX: usize = 3;
+
+/// `--q-max`'s help, with its defaults.
+pub fn q_max_help() -> String {
+    format!(
+        "Largest latent dimension of the leave-one-out sweep [default: {DEFAULT_Q_MAX}, {QUICK_Q_MAX} with --quick]"
+    )
+}
+
+/// The settings each part of the report sweeps.
+pub struct Plan {
+    /// Largest latent dimension of the leave-one-out sweep (below the
+    /// number of materials).
+    pub q_max: usize,
+    /// Optimiser of the fits for q = 1..q_max (the other one fits q = 2 too).
+    pub optimizer: OptimizerKind,
+    /// Hooke-Jeeves' minimum steps of the sweep.
+    pub min_steps: Vec<f64>,
+    /// Quadrature sample counts of the log map.
+    pub samples: Vec<usize>,
+    /// Map sizes timed.
+    pub sizes: Vec<usize>,
+    /// Reference pixels per side of the map-accuracy grid.
+    pub grid: usize,
+    /// Size of the map timed for each sample count.
+    pub timed_size: usize,
+    /// Latent points reconstructed for the precision comparison.
+    pub points: usize,
+    /// Time short runs three times and keep the median.
+    pub repeat: bool,
+}
+
+impl Plan {
+    /// The plan for `args` on `n` materials.
+    pub fn new(args: &Args, n: usize) -> Plan {
+        let asked = args.q_max.map_or(
+            if args.quick {
+                QUICK_Q_MAX
+            } else {
+                DEFAULT_Q_MAX
+            },
+            |q| q as usize,
+        );
+        let q_max = asked.min(n.saturating_sub(1)).max(1);
+        let optimizer = args.optimizer.into();
+        if args.quick {
+            Plan {
+                q_max,
+                optimizer,
+                min_steps: vec![1e-1, 1e-2, 1e-3],
+                samples: vec![16, 64, 256],
+                sizes: vec![64, 128, 256],
+                grid: 2,
+                timed_size: 128,
+                points: 2,
+                repeat: false,
+            }
+        } else {
+            Plan {
+                q_max,
+                optimizer,
+                min_steps: vec![1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4],
+                samples: vec![16, 64, 256, 1024, 4096],
+                sizes: vec![128, 256, 512, 1024],
+                grid: 4,
+                timed_size: 256,
+                points: 4,
+                repeat: true,
+            }
+        }
+    }
+
+    /// The optimiser that is not the plan's.
+    pub fn other_optimizer(&self) -> OptimizerKind {
+        match self.optimizer {
+            OptimizerKind::HookeJeeves => OptimizerKind::Lbfgs,
+            OptimizerKind::Lbfgs => OptimizerKind::HookeJeeves,
+        }
+    }
+}
