@@ -42,7 +42,7 @@ mod query;
 mod simd;
 
 pub use data::{Dataset, Precision, Rows, Store, TransformKind, build_store};
-pub use error::{CoreError, Result};
+pub use error::{CoreError, ParamError, Result};
 pub use eval::{loo, measure};
 pub use gplvm::optim;
 pub use gplvm::{CheckedParams, DriftStats, Fit, GplvmParams, GramData, Kernel, OptimizerKind};

@@ -123,7 +123,7 @@ impl From<CoreError> for Failure {
     fn from(e: CoreError) -> Failure {
         let status = match e {
             CoreError::Merl(e) => return e.into(),
-            CoreError::Io { .. } => BrdfAtlasStatus::Io,
+            CoreError::Io { .. } | CoreError::Write { .. } => BrdfAtlasStatus::Io,
             CoreError::BadFile { .. } => BrdfAtlasStatus::BadFile,
             CoreError::EmptyDataset { .. } | CoreError::DimsDiffer { .. } => {
                 BrdfAtlasStatus::BadMerl

@@ -169,9 +169,11 @@ pub fn measure(
     r.gram_rel_diff = (&log.y - &y64).norm_max() / log.y.norm_max();
     let models = match (&log.kept, &raw.kept) {
         (Some(lf), Some(rf)) => {
-            let log_model = model_file(work, "log-f32", data, lf, &log.store, &log.y, &log.gram)?;
-            let log64 = model_file(work, "log-f64", data, lf, &store64, &log.y, &log.gram)?;
-            let raw_model = model_file(work, "raw-f32", data, rf, &raw.store, &raw.y, &raw.gram)?;
+            let log_model =
+                in_memory_model(work, "log-f32", data, lf, &log.store, &log.y, &log.gram)?;
+            let log64 = in_memory_model(work, "log-f64", data, lf, &store64, &log.y, &log.gram)?;
+            let raw_model =
+                in_memory_model(work, "raw-f32", data, rf, &raw.store, &raw.y, &raw.gram)?;
             compare_precision(&log_model, &log64, plan, r)?;
             Some((log_model, raw_model))
         }
@@ -358,8 +360,9 @@ fn record_loo(
     Ok(())
 }
 
-/// Write a model file for `fit` on `store` into `work` and open it.
-fn model_file(
+/// The model of `fit` on `store`, in memory (named `work/NAME.atlas` in
+/// messages; nothing is written).
+fn in_memory_model(
     work: &Path,
     name: &str,
     data: &Dataset,
@@ -368,18 +371,14 @@ fn model_file(
     y: &Mat<f64>,
     gram: &GramData,
 ) -> Result<Model, Error> {
-    let path = work.join(format!("{name}.atlas"));
     let store_name = store
         .path()
         .file_name()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let rows = (0..y.nrows())
-        .map(|i| (0..y.ncols()).map(|j| y[(i, j)]).collect())
-        .collect();
-    let file = ModelFile::new(data.names.clone(), fit, store, rows, gram, store_name);
-    Model::write_file(&path, &file)?;
-    Ok(Model::open(&path)?)
+    let file = ModelFile::new(data.names.clone(), fit, store, y.as_ref(), gram, store_name);
+    let store = Store::open(store.path())?;
+    Ok(Model::new(work.join(format!("{name}.atlas")), file, store)?)
 }
 
 /// Latent points for the precision comparison: materials and midpoints.

@@ -36,7 +36,7 @@ use faer::{Accum, Mat, MatRef, Par, Side};
 
 use crate::data::store::{Rows, Store};
 use crate::data::transform::{InverseForm, Transform, TransformKind};
-use crate::error::{CoreError, Result};
+use crate::error::{CoreError, ParamError, Result};
 use crate::gplvm::kernel::Kernel;
 use crate::gplvm::likelihood::factor;
 use crate::progress::Progress;
@@ -54,9 +54,12 @@ pub fn gp_predictor(
 ) -> Result<Mat<f64>> {
     let n = latent.nrows();
     if n < 2 {
-        return Err(CoreError::InvalidParams(format!(
-            "leave-one-out needs at least 2 materials, got {n}"
-        )));
+        return Err(ParamError::TooFewMaterials {
+            method: "leave-one-out",
+            needs: 2,
+            got: n,
+        }
+        .into());
     }
     let (_, a) = factor(kernel.matrix(latent).as_ref(), "leave-one-out")?;
     let g: Vec<f64> = (0..n)
@@ -78,7 +81,7 @@ fn eigen_desc(y: MatRef<'_, f64>) -> Result<(Vec<f64>, Mat<f64>)> {
     let n = y.nrows();
     let evd = y
         .self_adjoint_eigen(Side::Lower)
-        .map_err(|_| CoreError::InvalidParams("eigen-decomposition failed".into()))?;
+        .map_err(|_| CoreError::Eigen("the Gram matrix"))?;
     let s = evd.S().column_vector();
     let u = evd.U();
     let vals = (0..n).rev().map(|k| s[k]).collect();
@@ -100,9 +103,12 @@ fn kept(vals: &[f64], q: usize) -> usize {
 pub fn pca_predictor(y: MatRef<'_, f64>, q: usize) -> Result<Mat<f64>> {
     let n = y.nrows();
     if n < 3 {
-        return Err(CoreError::InvalidParams(format!(
-            "PCA leave-one-out needs at least 3 materials, got {n}"
-        )));
+        return Err(ParamError::TooFewMaterials {
+            method: "PCA leave-one-out",
+            needs: 3,
+            got: n,
+        }
+        .into());
     }
     let m = (n - 1) as f64;
     let mut p = Mat::<f64>::zeros(n, n);
@@ -222,11 +228,12 @@ pub fn evaluate(
     let n = store.n();
     let count = predictors.len();
     if let Some(p) = predictors.iter().find(|p| p.nrows() != n || p.ncols() != n) {
-        return Err(CoreError::InvalidParams(format!(
-            "predictor is {}x{}, the store has {n} materials",
-            p.nrows(),
-            p.ncols()
-        )));
+        return Err(ParamError::PredictorShape {
+            rows: p.nrows(),
+            cols: p.ncols(),
+            n,
+        }
+        .into());
     }
     let mn = count * n;
     // All predictors stacked: row m * N + i predicts material i by method m.

@@ -337,6 +337,7 @@ impl<'a> IncrementalCost<'a> {
             self.fresh = fresh;
             return Err(CoreError::NotPositiveDefinite {
                 context: "refactorisation".into(),
+                pivot: None,
             });
         };
         // tr(K^-1 Y) for symmetric K^-1, Y: the sum of the elementwise product.

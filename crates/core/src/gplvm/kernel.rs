@@ -1,5 +1,6 @@
 //! The RBF kernel `c(x, x') = exp(-|x - x'|^2 / (2 l^2)) + mu delta(x, x')`.
 
+use crate::error::ParamError;
 use faer::{Mat, MatRef};
 use serde::{Deserialize, Serialize};
 
@@ -30,20 +31,22 @@ impl Kernel {
     /// Check the hyperparameters lie in [`LENGTH_SCALE_RANGE`] and
     /// [`NOISE_RANGE`] (beyond them `K` is all ones or the identity to
     /// working precision, or its entries are NaN); the error says which.
-    pub fn check(&self) -> Result<(), String> {
-        let (l0, l1) = LENGTH_SCALE_RANGE;
-        if !(l0..=l1).contains(&self.length_scale) {
-            return Err(format!(
-                "length scale {:?} must lie in [{l0:e}, {l1:e}]",
-                self.length_scale
-            ));
+    pub fn check(&self) -> Result<(), ParamError> {
+        let (min, max) = LENGTH_SCALE_RANGE;
+        if !(min..=max).contains(&self.length_scale) {
+            return Err(ParamError::LengthScale {
+                value: self.length_scale,
+                min,
+                max,
+            });
         }
-        let (m0, m1) = NOISE_RANGE;
-        if !(m0..=m1).contains(&self.noise) {
-            return Err(format!(
-                "noise {:?} must lie in [{m0:e}, {m1:e}] (it keeps K positive definite)",
-                self.noise
-            ));
+        let (min, max) = NOISE_RANGE;
+        if !(min..=max).contains(&self.noise) {
+            return Err(ParamError::Noise {
+                value: self.noise,
+                min,
+                max,
+            });
         }
         Ok(())
     }

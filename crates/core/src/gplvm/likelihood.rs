@@ -14,7 +14,7 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt;
 use faer::{Mat, MatRef, Par};
 
-use crate::error::{CoreError, Result};
+use crate::error::{CoreError, ParamError, Result};
 use crate::gplvm::kernel::Kernel;
 
 /// The data of a fit: the normalised Gram matrix and the dimension `d`.
@@ -30,16 +30,15 @@ impl GramData {
     pub fn new(y: Mat<f64>, d: usize) -> Result<GramData> {
         let n = y.nrows();
         if n == 0 || y.ncols() != n || d == 0 {
-            return Err(CoreError::InvalidParams(format!(
-                "Gram matrix {}x{} of dimension {d}",
-                y.nrows(),
-                y.ncols()
-            )));
+            return Err(ParamError::GramShape {
+                rows: y.nrows(),
+                cols: y.ncols(),
+                d,
+            }
+            .into());
         }
         if !y.as_ref().norm_max().is_finite() {
-            return Err(CoreError::InvalidParams(
-                "Gram matrix has non-finite entries".into(),
-            ));
+            return Err(ParamError::GramNotFinite.into());
         }
         let trace: f64 = (0..n).map(|i| y[(i, i)]).sum();
         let scale2 = if trace > 0.0 {
@@ -84,8 +83,9 @@ impl GramData {
 pub fn factor(k: MatRef<'_, f64>, context: &str) -> Result<(f64, Mat<f64>)> {
     let n = k.nrows();
     let par = Par::Seq;
-    let not_spd = || CoreError::NotPositiveDefinite {
+    let not_spd = |pivot| CoreError::NotPositiveDefinite {
         context: context.to_string(),
+        pivot,
     };
     let mut mem = MemBuffer::new(
         llt::factor::cholesky_in_place_scratch::<f64>(n, par, Default::default())
@@ -100,10 +100,12 @@ pub fn factor(k: MatRef<'_, f64>, context: &str) -> Result<(f64, Mat<f64>)> {
         stack,
         Default::default(),
     )
-    .map_err(|_| not_spd())?;
+    .map_err(|e| match e {
+        llt::factor::LltError::NonPositivePivot { index } => not_spd(Some(index)),
+    })?;
     let logdet = 2.0 * (0..n).map(|i| l[(i, i)].ln()).sum::<f64>();
     if !logdet.is_finite() {
-        return Err(not_spd());
+        return Err(not_spd(None));
     }
     // `inverse` reads the lower triangle of `l` and writes the lower triangle of `inv`.
     let mut inv = Mat::<f64>::zeros(n, n);

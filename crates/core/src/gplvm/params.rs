@@ -13,7 +13,7 @@
 
 use faer::Mat;
 
-use crate::error::{CoreError, Result};
+use crate::error::{ParamError, Result};
 use crate::gplvm::kernel::Kernel;
 use crate::gplvm::likelihood::GramData;
 use crate::gplvm::optim::{HookeJeeves, Lbfgs, Optimizer, OptimizerKind, Outcome, Problem};
@@ -92,30 +92,21 @@ impl GplvmParams {
 
     /// Check the values; only checked parameters can fit.
     pub fn check(self) -> Result<CheckedParams> {
-        let bad = |m: String| Err(CoreError::InvalidParams(m));
-        let k = self.kernel;
-        if self.q == 0 || self.q > crate::limits::MAX_Q {
-            return bad(format!(
-                "q = {} must be between 1 and {}",
-                self.q,
-                crate::limits::MAX_Q
-            ));
+        let max = crate::limits::MAX_Q;
+        if self.q == 0 || self.q > max {
+            return Err(ParamError::LatentDim { q: self.q, max }.into());
         }
-        if let Err(why) = k.check() {
-            return bad(why);
-        }
+        self.kernel.check()?;
         let hj = self.hooke_jeeves;
         if !(hj.min_step > 0.0 && hj.initial_step >= hj.min_step && hj.initial_step <= 2.0) {
-            return bad(format!(
-                "steps must satisfy 0 < min step ({}) <= initial step ({}) <= 2",
-                hj.min_step, hj.initial_step
-            ));
+            return Err(ParamError::Steps {
+                min_step: hj.min_step,
+                initial_step: hj.initial_step,
+            }
+            .into());
         }
         if !(hj.reduction > 0.0 && hj.reduction < 1.0) {
-            return bad(format!(
-                "step reduction {} must lie in (0, 1)",
-                hj.reduction
-            ));
+            return Err(ParamError::Reduction(hj.reduction).into());
         }
         Ok(CheckedParams(self))
     }

@@ -9,19 +9,17 @@
 
 use faer::{Mat, MatRef, Side};
 
-use crate::error::{CoreError, Result};
+use crate::error::{CoreError, ParamError, Result};
 
 /// The `N x q` PCA start, and the eigenvalues of `Y` in descending order.
 pub fn dual_pca(y: MatRef<'_, f64>, q: usize) -> Result<(Mat<f64>, Vec<f64>)> {
     let n = y.nrows();
     if q == 0 || q >= n.max(1) {
-        return Err(CoreError::InvalidParams(format!(
-            "latent dimension q = {q} needs 1 <= q < N = {n} (the number of materials)"
-        )));
+        return Err(ParamError::LatentDimForData { q, n }.into());
     }
-    let evd = y.self_adjoint_eigen(Side::Lower).map_err(|_| {
-        CoreError::InvalidParams("eigen-decomposition of the Gram matrix failed".into())
-    })?;
+    let evd = y
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|_| CoreError::Eigen("the Gram matrix"))?;
     let s = evd.S().column_vector();
     let u = evd.U();
     let eigenvalues: Vec<f64> = (0..n).rev().map(|k| s[k]).collect();

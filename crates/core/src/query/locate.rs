@@ -54,7 +54,7 @@ impl Model {
                 let mut raw = vec![0.0; range.len()];
                 file.copy_raw(r0, &mut raw);
                 let mut t = vec![0.0; range.len()];
-                self.transform.forward_raw_rows(bins, r0, &raw, &mut t);
+                self.transform().forward_raw_rows(bins, r0, &raw, &mut t);
                 let mut zrow = vec![0.0; n];
                 for (j, tv) in t.iter().enumerate() {
                     let z = tv - mean[r0 + j];

@@ -15,8 +15,6 @@
 //!   pixels is one matrix product `C k(X_row)`. The sample count trades
 //!   accuracy for time (see the README's figures).
 
-use std::sync::OnceLock;
-
 use brdf_merl::Quadrature;
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
@@ -34,20 +32,6 @@ use crate::simd::fastexp;
 /// Quadrature samples per pixel when a map needs them (non-linear transforms)
 /// and the caller gives none; see the README's figures for what it buys.
 pub const DEFAULT_SAMPLES: usize = 256;
-
-/// The parts of a map that depend on the model only, not on the view, size
-/// or sample count: built by the first map that needs them and kept, so
-/// that a viewer redrawing the map on every zoom or pan (the BRDF Explorer
-/// plugin does) pays once for the passes over the store behind them.
-#[derive(Default)]
-pub(crate) struct MapBasis {
-    /// [`Quadrature::dense`] with 2 sub-cells a bin.
-    rule: OnceLock<Quadrature>,
-    /// The linear map's `K^-1 A` (one N-vector per channel) and the mean's albedo.
-    linear: OnceLock<([Vec<f64>; 3], [f64; 3])>,
-    /// See [`Model::shape`].
-    shape: OnceLock<Vec<f64>>,
-}
 
 /// A window of the latent plane: `x` in `[x0, x1]`, `y` in `[y0, y1]`, y up.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -193,7 +177,7 @@ impl Model {
 
     /// The dense albedo rule of the model's dims (2 sub-cells a bin), built once.
     pub fn albedo_rule(&self) -> &Quadrature {
-        self.map_basis
+        self.map_basis()
             .rule
             .get_or_init(|| Quadrature::dense(self.dims(), 2))
     }
@@ -202,14 +186,14 @@ impl Model {
     /// unmeasured bins 0): the shape the map's quadrature rule assumes
     /// within each box of bins ([`Quadrature::with_samples_shaped`]). Built once.
     pub fn shape(&self) -> &[f64] {
-        self.map_basis.shape.get_or_init(|| {
+        self.map_basis().shape.get_or_init(|| {
             let store = self.store();
             let bins = self.dims().bins();
             let (mean, unmeasured) = (store.mean(), store.unmeasured());
             let mut shape = vec![0.0f64; bins];
             let mut value = vec![0.0f64; bins];
             for c in 0..3 {
-                self.transform
+                self.transform()
                     .inverse_run(0, &mean[c * bins..(c + 1) * bins], &mut value);
                 for ((s, v), &u) in shape.iter_mut().zip(&value).zip(&unmeasured[c * bins..]) {
                     if u == 0 {
@@ -225,7 +209,7 @@ impl Model {
     /// albedos of [`Model::material_albedos`] with [`Model::albedo_rule`])
     /// and the mean material's albedo. Built once.
     fn linear_basis(&self) -> &([Vec<f64>; 3], [f64; 3]) {
-        self.map_basis.linear.get_or_init(|| {
+        self.map_basis().linear.get_or_init(|| {
             let (a, m) = self.material_albedos(self.albedo_rule());
             let n = a.len();
             let b = self.llt_solve(&Mat::from_fn(n, 3, |i, c| a[i][c]));
@@ -325,7 +309,7 @@ impl Model {
                     for (&b, &w) in rule.bins().iter().zip(rule.weights()) {
                         let row = c * bins + b as usize;
                         if store.unmeasured()[row] == 0 {
-                            let scale = match self.transform.inverse_form(b as usize) {
+                            let scale = match self.transform().inverse_form(b as usize) {
                                 InverseForm::Linear(s) => s,
                                 InverseForm::Exp(s) => {
                                     exponential = true;

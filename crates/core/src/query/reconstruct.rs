@@ -137,7 +137,7 @@ impl<'m> Blend<'m> {
         }
         let mut out = [0.0];
         self.model
-            .transform
+            .transform()
             .inverse_run(row % bins, &[self.transformed(row)], &mut out);
         Some(out[0])
     }
@@ -189,7 +189,9 @@ impl<'m> Blend<'m> {
                         let (c, bin0) = ((r0 + j) / bins, (r0 + j) % bins);
                         let len = (out.len() - j).min(bins - bin0);
                         let run = &mut out[j..j + len];
-                        self.model.transform.inverse_run(bin0, &t[j..j + len], run);
+                        self.model
+                            .transform()
+                            .inverse_run(bin0, &t[j..j + len], run);
                         for (o, &u) in run.iter_mut().zip(&unmeasured[r0 + j..r0 + j + len]) {
                             *o = if u != 0 {
                                 INVALID

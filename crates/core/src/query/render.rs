@@ -12,7 +12,8 @@ use font8x8::UnicodeFonts;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result};
-use crate::model::{LATENT_LIMIT, MAX_MATERIALS, Model};
+use crate::limits::{LATENT_LIMIT, MAX_MATERIALS};
+use crate::model::Model;
 use crate::query::map::{
     AlbedoMap, AlbedoMethod, Segment, View, contour_levels, contours, luminance,
 };
@@ -247,11 +248,11 @@ pub fn write_sidecar(path: &Path, sidecar: &Sidecar) -> Result<()> {
 }
 
 fn commit(path: &Path, staged: PendingFile) -> Result<()> {
-    staged.commit(false).map_err(|e| CoreError::io(path, e))
+    staged.commit(false).map_err(|e| CoreError::write(path, e))
 }
 
 fn stage_bytes(path: &Path, bytes: &[u8]) -> Result<PendingFile> {
-    stage(path, |f| std::io::Write::write_all(f, bytes)).map_err(|e| CoreError::io(path, e))
+    stage(path, |f| std::io::Write::write_all(f, bytes)).map_err(|e| CoreError::write(path, e))
 }
 
 /// The PNG of [`write_png`], complete on disk under a temporary name beside
@@ -267,10 +268,10 @@ pub fn stage_png(path: &Path, picture: &Picture, labels: bool) -> Result<Pending
         enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
         let mut writer = enc
             .write_header()
-            .map_err(|e| CoreError::bad_file(path, e.to_string()))?;
+            .map_err(|e| CoreError::write(path, std::io::Error::other(e.to_string())))?;
         writer
             .write_image_data(&data)
-            .map_err(|e| CoreError::bad_file(path, e.to_string()))?;
+            .map_err(|e| CoreError::write(path, std::io::Error::other(e.to_string())))?;
     }
     stage_bytes(path, &bytes)
 }
@@ -287,14 +288,14 @@ pub fn stage_exr(path: &Path, map: &AlbedoMap) -> Result<PendingFile> {
     Image::from_channels((map.width, map.height), channels)
         .write()
         .to_buffered(&mut cursor)
-        .map_err(|e| CoreError::bad_file(path, e.to_string()))?;
+        .map_err(|e| CoreError::write(path, std::io::Error::other(e.to_string())))?;
     stage_bytes(path, cursor.get_ref())
 }
 
 /// The sidecar of [`write_sidecar`], staged like [`stage_png`].
 pub fn stage_sidecar(path: &Path, sidecar: &Sidecar) -> Result<PendingFile> {
-    let json =
-        serde_json::to_vec_pretty(sidecar).map_err(|e| CoreError::bad_file(path, e.to_string()))?;
+    let json = serde_json::to_vec_pretty(sidecar)
+        .map_err(|e| CoreError::write(path, std::io::Error::other(e.to_string())))?;
     stage_bytes(path, &json)
 }
 

@@ -275,14 +275,14 @@ pub fn build_store(
     let n = data.len();
     let bins = dims.bins();
     let layout = Layout::new(dims.values(), n, precision);
-    let pending = PendingFile::create(out).map_err(|e| CoreError::io(out, e))?;
+    let pending = PendingFile::create(out).map_err(|e| CoreError::write(out, e))?;
     let file = pending.file();
     pending
         .allocate(layout.len as u64)
-        .map_err(|e| CoreError::io(out, e))?;
+        .map_err(|e| CoreError::write(out, e))?;
     let header = Layout::header(dims, n, precision, transform);
     file.write_all_at(&header, 0)
-        .map_err(|e| CoreError::io(out, e))?;
+        .map_err(|e| CoreError::write(out, e))?;
 
     let t = transform.build(dims);
     // The first unreadable value in (material, value) order, whatever the
@@ -358,9 +358,11 @@ pub fn build_store(
         return Err(e);
     }
     if let Some(e) = write_error.into_inner().expect("no panics while locked") {
-        return Err(CoreError::io(out, e));
+        return Err(CoreError::write(out, e));
     }
-    pending.commit(false).map_err(|e| CoreError::io(out, e))?;
+    pending
+        .commit(false)
+        .map_err(|e| CoreError::write(out, e))?;
     Ok((Store::open(out)?, y))
 }
 

@@ -1,0 +1,266 @@
+//! The model file: a fitted latent space beside its store.
+//!
+//! A model is two files: `NAME` (JSON, small, self-describing, versioned)
+//! and `NAME.store` (the data, see [`crate::data::store`]). The JSON names the
+//! store relative to itself and records its size and checksum, so a moved
+//! pair still opens and a changed store is refused. Both are written
+//! atomically.
+
+use std::path::{Path, PathBuf};
+
+use brdf_merl::Dims;
+use brdf_merl::atomic::write_atomic;
+use faer::MatRef;
+use serde::{Deserialize, Serialize};
+
+use crate::data::{Precision, Store, TransformKind};
+use crate::error::{CoreError, Result};
+use crate::gplvm::kernel::{Kernel, rows_of};
+use crate::gplvm::{DriftStats, Fit, GramData, OptimizerKind};
+use crate::limits::{LATENT_LIMIT, MAX_MATERIALS, MAX_Q};
+
+/// The `format` field of every model file.
+pub const FORMAT: &str = "brdf-atlas-model";
+/// The model format version this build writes and reads.
+pub const VERSION: u32 = 1;
+
+/// Where the store is and how to recognise it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StoreRef {
+    /// Path of the store, relative to the model file's directory.
+    pub path: String,
+    /// Its size in bytes.
+    pub bytes: u64,
+    /// Its checksum ([`Store::checksum`]), hex.
+    pub checksum: String,
+}
+
+/// What the optimiser did, for the record.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FitRecord {
+    /// Optimiser used.
+    pub optimizer: OptimizerKind,
+    /// Cost at the PCA start.
+    pub initial_cost: f64,
+    /// Final cost `d/2 log|K| + 1/2 tr(K^-1 Y)` (normalised `Y`).
+    pub cost: f64,
+    /// Optimiser iterations.
+    pub iterations: u64,
+    /// Cost evaluations.
+    pub evaluations: u64,
+    /// Accepted pattern moves.
+    pub pattern_moves: u64,
+    /// Incremental-update health.
+    pub drift: DriftStats,
+    /// Eigenvalues of the normalised Gram matrix, descending.
+    pub eigenvalues: Vec<f64>,
+}
+
+/// The JSON content of a model file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ModelFile {
+    /// Always [`FORMAT`].
+    pub format: String,
+    /// Format version ([`VERSION`]).
+    pub version: u32,
+    /// Material names, in store column order.
+    pub names: Vec<String>,
+    /// Latent points, one `q`-vector per material.
+    pub latent: Vec<Vec<f64>>,
+    /// Kernel hyperparameters.
+    pub kernel: Kernel,
+    /// Data transform of the store.
+    pub transform: TransformKind,
+    /// Store precision.
+    pub precision: Precision,
+    /// Table dims `[theta_h, theta_d, phi_d]`.
+    pub dims: [usize; 3],
+    /// Dimension `d` of each material (3 * bins).
+    pub d: usize,
+    /// The variance the Gram matrix was normalised by before fitting.
+    pub signal_variance: f64,
+    /// The fit.
+    pub fit: FitRecord,
+    /// The Gram matrix `Y = Z Z^T` of the centred data (not normalised),
+    /// row by row: what locating a new material needs.
+    pub gram: Vec<Vec<f64>>,
+    /// The store.
+    pub store: StoreRef,
+}
+
+impl ModelFile {
+    /// The model file of `fit` on `store` (materials `names`, in store
+    /// order; `y` the Gram matrix before normalisation, `gram` the fitted
+    /// data; the store named `store_name` beside the model file).
+    /// Checksums the store.
+    pub fn new(
+        names: Vec<String>,
+        fit: &Fit,
+        store: &Store,
+        y: MatRef<'_, f64>,
+        gram: &GramData,
+        store_name: String,
+    ) -> ModelFile {
+        let dims = store.dims();
+        let o = &fit.outcome;
+        ModelFile {
+            format: FORMAT.into(),
+            version: VERSION,
+            names,
+            latent: rows_of(o.latent.as_ref()),
+            kernel: fit.kernel,
+            transform: store.transform(),
+            precision: store.precision(),
+            dims: [dims.theta_h, dims.theta_d, dims.phi_d],
+            d: store.rows(),
+            signal_variance: gram.scale2(),
+            fit: FitRecord {
+                optimizer: fit.optimizer,
+                initial_cost: o.initial_cost,
+                cost: o.cost,
+                iterations: o.iterations,
+                evaluations: o.evaluations,
+                pattern_moves: o.pattern_moves,
+                drift: o.drift,
+                eigenvalues: fit.eigenvalues.clone(),
+            },
+            gram: rows_of(y),
+            store: StoreRef {
+                path: store_name,
+                bytes: store.len_bytes(),
+                checksum: format!("{:016x}", store.checksum()),
+            },
+        }
+    }
+}
+
+/// The store file that goes with a model path: `NAME.store`.
+pub fn store_path_for(model: &Path) -> PathBuf {
+    let mut s = model.as_os_str().to_os_string();
+    s.push(".store");
+    PathBuf::from(s)
+}
+
+impl ModelFile {
+    /// Parse and check the JSON of a model file without touching its store:
+    /// format, version, the shapes of every array and the sanity of every
+    /// number. `path` names the file in errors.
+    pub fn from_json(path: &Path, bytes: &[u8]) -> Result<ModelFile> {
+        let bad = |why: String| CoreError::bad_file(path, why);
+        if brdf_merl::table::is_lfs_pointer(bytes) {
+            return Err(bad(
+                "is a Git LFS pointer file, not a brdf-atlas model (run `git lfs pull` to fetch the real file)".into(),
+            ));
+        }
+        if bytes.iter().all(u8::is_ascii_whitespace) {
+            return Err(bad("empty file, expected a brdf-atlas model (JSON)".into()));
+        }
+        let value: serde_json::Value = serde_json::from_slice(bytes)
+            .map_err(|e| bad(format!("not a brdf-atlas model (invalid JSON: {e})")))?;
+        if value.get("format").and_then(|v| v.as_str()) != Some(FORMAT) {
+            return Err(bad(format!(
+                "not a brdf-atlas model (expected \"format\": \"{FORMAT}\")"
+            )));
+        }
+        match value.get("version").and_then(|v| v.as_u64()) {
+            Some(v) if v == VERSION as u64 => {}
+            Some(v) if v > VERSION as u64 => {
+                return Err(bad(format!(
+                    "model format version {v} was written by a newer brdf-atlas (this build reads version {VERSION}); upgrade brdf-atlas"
+                )));
+            }
+            Some(v) => {
+                return Err(bad(format!(
+                    "model format version {v}, this build reads version {VERSION}"
+                )));
+            }
+            None => {
+                return Err(bad(
+                    "model has no version number (expected \"version\": 1)".into()
+                ));
+            }
+        }
+        let file: ModelFile =
+            serde_json::from_value(value).map_err(|e| bad(format!("malformed model: {e}")))?;
+        file.check().map_err(bad)?;
+        Ok(file)
+    }
+
+    /// Shapes and ranges of everything the JSON holds.
+    fn check(&self) -> std::result::Result<(), String> {
+        let n = self.names.len();
+        if n == 0 || n > MAX_MATERIALS {
+            return Err(format!("{n} materials, expected 1 to {MAX_MATERIALS}"));
+        }
+        if self.latent.len() != n {
+            return Err(format!("{n} names but {} latent points", self.latent.len()));
+        }
+        let q = self.latent[0].len();
+        if q == 0 || q > MAX_Q || q >= n {
+            return Err(format!(
+                "latent dimension q = {q}, expected 1 to {MAX_Q} and fewer than the {n} materials"
+            ));
+        }
+        for (i, p) in self.latent.iter().enumerate() {
+            if p.len() != q {
+                return Err(format!(
+                    "latent point {i} has {} coordinates, the first has {q}",
+                    p.len()
+                ));
+            }
+            if let Some(v) = p.iter().find(|v| v.is_nan() || v.abs() > LATENT_LIMIT) {
+                return Err(format!(
+                    "latent point {i} ({}) has coordinate {v:?}, expected finite numbers within +-{LATENT_LIMIT} (a fit keeps them in [-1, 1])",
+                    self.names[i]
+                ));
+            }
+        }
+        self.kernel
+            .check()
+            .map_err(|why| format!("kernel: {why}"))?;
+        let dims = Dims::new(self.dims[0], self.dims[1], self.dims[2])
+            .map_err(|e| format!("\"dims\": {e}"))?;
+        if self.d != dims.values() {
+            return Err(format!(
+                "d = {}, but dims {dims} have {} values",
+                self.d,
+                dims.values()
+            ));
+        }
+        if !(self.signal_variance.is_finite() && self.signal_variance > 0.0) {
+            return Err(format!(
+                "signal variance {:?} must be positive and finite",
+                self.signal_variance
+            ));
+        }
+        if self.gram.len() != n
+            || self
+                .gram
+                .iter()
+                .any(|r| r.len() != n || r.iter().any(|v| !v.is_finite()))
+        {
+            return Err(format!("the Gram matrix must be {n}x{n} finite numbers"));
+        }
+        let name = Path::new(&self.store.path);
+        if self.store.path.is_empty() || name.is_absolute() {
+            return Err(format!(
+                "store path {:?}: expected a path relative to the model file",
+                self.store.path
+            ));
+        }
+        Ok(())
+    }
+
+    /// The JSON text of the model file (what [`ModelFile::from_json`] reads
+    /// back); `path` names the file in errors.
+    pub fn to_json(&self, path: &Path) -> Result<Vec<u8>> {
+        serde_json::to_vec_pretty(self).map_err(|e| CoreError::write(path, e.into()))
+    }
+
+    /// Write the model file atomically (the store must already be in place).
+    pub fn write(&self, path: &Path) -> Result<()> {
+        let json = self.to_json(path)?;
+        write_atomic(path, |w| std::io::Write::write_all(w, &json))
+            .map_err(|e| CoreError::write(path, e))
+    }
+}

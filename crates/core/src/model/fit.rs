@@ -1,0 +1,180 @@
+//! The whole fit: a directory of MERL files in, a model file and its store
+//! out, each put in place only when both are complete.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use brdf_merl::atomic::{Swapped, stage, swap_in};
+
+use super::file::{ModelFile, store_path_for};
+use crate::data::{Dataset, Precision, TransformKind, build_store};
+use crate::error::{CoreError, Result};
+use crate::gplvm::{CheckedParams, Fit, GramData};
+use crate::progress::Progress;
+
+/// Settings of a whole fit from a directory of MERL files.
+#[derive(Debug, Clone)]
+pub struct FitOptions {
+    /// GPLVM parameters.
+    pub params: CheckedParams,
+    /// Data transform.
+    pub transform: TransformKind,
+    /// Store precision.
+    pub precision: Precision,
+}
+
+/// What a fit did and how long each phase took.
+#[derive(Debug)]
+pub struct FitReport {
+    /// The opened data set (materials, ignored entries).
+    pub names: Vec<String>,
+    /// Entries of the directory that were not used.
+    pub ignored: Vec<(PathBuf, String)>,
+    /// The fit.
+    pub fit: Fit,
+    /// The model file written.
+    pub model_path: PathBuf,
+    /// The store written.
+    pub store_path: PathBuf,
+    /// Opening the MERL files (mapping, header and size checks; their
+    /// values are checked as the store pass reads them).
+    pub scan_time: Duration,
+    /// The one pass building the store and the Gram matrix.
+    pub store_time: Duration,
+    /// The optimisation.
+    pub optimise_time: Duration,
+    /// Writing the model and checksumming the store.
+    pub save_time: Duration,
+    /// Largest heap in use during the fit, when the binary counts it
+    /// ([`crate::heap::Counting`]); the inputs and the store are mapped
+    /// files, not heap.
+    pub peak_heap: Option<usize>,
+}
+
+/// Fit a directory of MERL files and write `model` and `model.store`.
+pub fn fit_dir(
+    dir: &Path,
+    model: &Path,
+    options: &FitOptions,
+    progress: &dyn Progress,
+) -> Result<FitReport> {
+    let t0 = Instant::now();
+    crate::heap::reset_peak();
+    let data = Dataset::map_dir(dir)?;
+    let scan_time = t0.elapsed();
+    let t1 = Instant::now();
+    let store_path = store_path_for(model);
+    // The store is built under a temporary name and takes its place only
+    // once the fit has succeeded: a failed re-fit leaves the old pair intact.
+    let staging = brdf_merl::atomic::temp_path_for(&store_path);
+    let result = fit_staged(
+        &data,
+        model,
+        options,
+        progress,
+        &store_path,
+        &staging,
+        scan_time,
+        t1,
+    );
+    if result.is_err() {
+        let _ = std::fs::remove_file(&staging);
+    }
+    // Name the store, not its temporary name, in errors.
+    result.map_err(|e| match e {
+        CoreError::Write { path, source } if path == staging => CoreError::Write {
+            path: store_path,
+            source,
+        },
+        CoreError::Io { path, source } if path == staging => CoreError::Io {
+            path: store_path,
+            source,
+        },
+        e => e,
+    })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn fit_staged(
+    data: &Dataset,
+    model: &Path,
+    options: &FitOptions,
+    progress: &dyn Progress,
+    store_path: &Path,
+    staging: &Path,
+    scan_time: Duration,
+    t1: Instant,
+) -> Result<FitReport> {
+    let (store, y) = build_store(
+        data,
+        options.transform,
+        options.precision,
+        staging,
+        progress,
+    )?;
+    let store_time = t1.elapsed();
+    let t2 = Instant::now();
+    let file_y = y.clone();
+    let gram = GramData::new(y, store.rows())?;
+    // The optimisation runs on one core: meanwhile the other drops the old
+    // store's cached pages (the file stays as it is until the new model is
+    // in place), so removing it at the end is quick.
+    let fit = std::thread::scope(|scope| {
+        scope.spawn(|| brdf_merl::atomic::evict_cached(store_path));
+        options.params.fit(&gram, progress)
+    })?;
+    let optimise_time = t2.elapsed();
+    let t3 = Instant::now();
+    let store_name = store_path
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let file = ModelFile::new(
+        data.names.clone(),
+        &fit,
+        &store,
+        file_y.as_ref(),
+        &gram,
+        store_name,
+    );
+    // Both files are complete on disk before either takes its place.
+    let json = file.to_json(model)?;
+    let staged = stage(model, |w| std::io::Write::write_all(w, &json))
+        .map_err(|e| CoreError::write(model, e))?;
+    if model.is_dir() {
+        return Err(CoreError::write(
+            model,
+            std::io::Error::new(std::io::ErrorKind::IsADirectory, "is a directory"),
+        ));
+    }
+    // The store goes in by an exchange, so the old one (if any) is still at
+    // hand until the model, the commit point, is in place.
+    let swapped = swap_in(staging, store_path).map_err(|e| CoreError::write(store_path, e))?;
+    if let Err(e) = staged.commit(false) {
+        if swapped == Swapped::Exchanged {
+            // Undo: the old store back beside the old model. Best effort; the
+            // commit's error is the one to report.
+            let _ = swap_in(staging, store_path);
+        }
+        return Err(CoreError::write(model, e));
+    }
+    if swapped == Swapped::Exchanged {
+        // The old store. Freeing its cached pages is most of the time a
+        // re-fit spends saving (about 0.4 s a GB here); failing to remove it
+        // loses nothing.
+        let _ = std::fs::remove_file(staging);
+    }
+    let save_time = t3.elapsed();
+    Ok(FitReport {
+        names: data.names.clone(),
+        ignored: data.ignored.clone(),
+        fit,
+        model_path: model.to_path_buf(),
+        store_path: store_path.to_path_buf(),
+        scan_time,
+        store_time,
+        optimise_time,
+        save_time,
+        peak_heap: crate::heap::peak(),
+    })
+}
