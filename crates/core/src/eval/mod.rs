@@ -3,3 +3,4 @@
 
 pub mod loo;
 pub mod measure;
+mod predictors;
