@@ -1,7 +1,7 @@
 //! Data transforms: the space in which the GPLVM sees the BRDF values.
 //!
 //! A transform maps each measured reflectance value (per channel and bin) to
-//! the number that enters `Z`, and back. `raw` is the seed's choice (the
+//! the number that enters `Z`, and back. `raw` is the paper's choice (the
 //! values themselves); `log` is the cosine-weighted log of Sztrajman et al.
 //! 2021, `log(1 + f cos(theta_i) cos(theta_o))`, which compresses the
 //! dynamic range (1e-3 .. 1e4) so that highlights do not dominate the fit.

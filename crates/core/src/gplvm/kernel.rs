@@ -4,7 +4,7 @@ use crate::error::ParamError;
 use faer::{Mat, MatRef};
 use serde::{Deserialize, Serialize};
 
-/// Kernel hyperparameters: length scale `l` and noise `mu` (the seed's defaults are 1 and 1e-4).
+/// Kernel hyperparameters: length scale `l` and noise `mu` (defaults 1 and 1e-4, the paper's).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Kernel {
     /// Length scale `l` of the RBF.

@@ -20,7 +20,7 @@ use crate::gplvm::optim::{HookeJeeves, Lbfgs, Optimizer, OptimizerKind, Outcome,
 use crate::gplvm::pca::dual_pca;
 use crate::progress::Progress;
 
-/// GPLVM settings; `Default` gives the seed's (q = 2, l = 1, mu = 1e-4, Hooke-Jeeves).
+/// GPLVM settings; `Default` gives the paper's (q = 2, l = 1, mu = 1e-4, Hooke-Jeeves).
 #[derive(Debug, Clone, PartialEq)]
 pub struct GplvmParams {
     q: usize,

@@ -160,7 +160,7 @@ fn fit_staged(
     }
     if swapped == Swapped::Exchanged {
         // The old store. Freeing its cached pages is most of the time a
-        // re-fit spends saving (about 0.4 s a GB here); failing to remove it
+        // re-fit spends saving; failing to remove it
         // loses nothing.
         let _ = std::fs::remove_file(staging);
     }

@@ -13,7 +13,7 @@
 //!   rule with `samples` points and integrates them. The rows the rule needs
 //!   are gathered once and premultiplied by `K^-1` (`C = Z_q K^-1`), so a row of
 //!   pixels is one matrix product `C k(X_row)`. The sample count trades
-//!   accuracy for time (see the README's figures).
+//!   accuracy for time (docs/performance.md has the figures).
 
 use brdf_merl::Quadrature;
 use faer::linalg::matmul::matmul;
@@ -30,7 +30,7 @@ use crate::simd::dot;
 use crate::simd::fastexp;
 
 /// Quadrature samples per pixel when a map needs them (non-linear transforms)
-/// and the caller gives none; see the README's figures for what it buys.
+/// and the caller gives none; docs/performance.md says what it buys.
 pub const DEFAULT_SAMPLES: usize = 256;
 
 /// A window of the latent plane: `x` in `[x0, x1]`, `y` in `[y0, y1]`, y up.
@@ -121,11 +121,6 @@ pub struct AlbedoMap {
     pub rgb: Vec<[f32; 3]>,
     /// How it was computed.
     pub method: AlbedoMethod,
-}
-
-/// Luminance of linear RGB (Rec. 709 weights).
-pub fn luminance(c: [f32; 3]) -> f32 {
-    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
 }
 
 impl Model {
@@ -391,84 +386,4 @@ fn sum4(v: &[f64]) -> f64 {
         }
     }
     (acc[0] + acc[1]) + (acc[2] + acc[3]) + rest
-}
-
-/// A contour segment in pixel coordinates, and its level index.
-pub type Segment = ([f32; 2], [f32; 2], usize);
-
-/// Marching squares on the luminance of `map` at `levels` (pixel centres
-/// are grid nodes). Returns the segments of every level.
-pub fn contours(map: &AlbedoMap, levels: &[f32]) -> Vec<Segment> {
-    let (w, h) = (map.width, map.height);
-    let lum: Vec<f32> = map.rgb.iter().map(|c| luminance(*c)).collect();
-    let mut out = Vec::new();
-    if w < 2 || h < 2 {
-        return out;
-    }
-    for (li, &level) in levels.iter().enumerate() {
-        for y in 0..h - 1 {
-            for x in 0..w - 1 {
-                // Corners: 0 top-left, 1 top-right, 2 bottom-right, 3 bottom-left.
-                let v = [
-                    lum[y * w + x],
-                    lum[y * w + x + 1],
-                    lum[(y + 1) * w + x + 1],
-                    lum[(y + 1) * w + x],
-                ];
-                let p = [
-                    [x as f32, y as f32],
-                    [x as f32 + 1.0, y as f32],
-                    [x as f32 + 1.0, y as f32 + 1.0],
-                    [x as f32, y as f32 + 1.0],
-                ];
-                let above: Vec<bool> = v.iter().map(|&a| a >= level).collect();
-                // Crossing points on the four edges (edge k joins corner k and k+1).
-                let cross = |k: usize| -> Option<[f32; 2]> {
-                    let (a, b) = (k, (k + 1) % 4);
-                    if above[a] == above[b] {
-                        return None;
-                    }
-                    let t = (level - v[a]) / (v[b] - v[a]);
-                    Some([
-                        p[a][0] + t * (p[b][0] - p[a][0]) + 0.5,
-                        p[a][1] + t * (p[b][1] - p[a][1]) + 0.5,
-                    ])
-                };
-                let pts: Vec<[f32; 2]> = (0..4).filter_map(cross).collect();
-                match pts.len() {
-                    2 => out.push((pts[0], pts[1], li)),
-                    4 => {
-                        // Saddle: decide by the centre value.
-                        let centre = v.iter().sum::<f32>() / 4.0;
-                        if (centre >= level) == above[0] {
-                            out.push((pts[0], pts[3], li));
-                            out.push((pts[1], pts[2], li));
-                        } else {
-                            out.push((pts[0], pts[1], li));
-                            out.push((pts[2], pts[3], li));
-                        }
-                    }
-                    _ => {}
-                }
-            }
-        }
-    }
-    out
-}
-
-/// `count` levels evenly spaced strictly inside the luminance range of `map`.
-pub fn contour_levels(map: &AlbedoMap, count: usize) -> Vec<f32> {
-    let (lo, hi) = map
-        .rgb
-        .iter()
-        .map(|c| luminance(*c))
-        .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), l| {
-            (a.min(l), b.max(l))
-        });
-    if !(lo.is_finite() && hi.is_finite() && hi > lo) {
-        return Vec::new();
-    }
-    (1..=count)
-        .map(|k| lo + (hi - lo) * k as f32 / (count + 1) as f32)
-        .collect()
 }

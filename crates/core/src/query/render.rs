@@ -14,9 +14,8 @@ use serde::{Deserialize, Serialize};
 use crate::error::{CoreError, Result};
 use crate::limits::{LATENT_LIMIT, MAX_MATERIALS};
 use crate::model::Model;
-use crate::query::map::{
-    AlbedoMap, AlbedoMethod, Segment, View, contour_levels, contours, luminance,
-};
+use crate::query::contour::{Segment, contour_levels, contours, luminance};
+use crate::query::map::{AlbedoMap, AlbedoMethod, View};
 
 /// An input material drawn on the map.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

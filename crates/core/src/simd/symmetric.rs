@@ -11,9 +11,8 @@
 //! keep enough independent additions in flight; it performs the same
 //! operations in the same order as the portable path (`f64::mul_add`), so
 //! both give the same bits. (On x86 without FMA the portable `mul_add` is a
-//! library call, much slower; the fused products are more accurate, and on
-//! the 100 NBRDF materials the search refactorised 1431 times instead of
-//! 1655 with separate roundings.) A quadratic form `x^T A x` reads only the
+//! library call, much slower; the fused products are more accurate, so the
+//! search's incremental cost drifts less and refactorises less often.) A quadratic form `x^T A x` reads only the
 //! block lower triangle, about half the arithmetic. The rank-two update is
 //! element by element without fusing, the same bits on every path, and exactly
 //! symmetric: `a_rc` and `a_cr` get the same products.

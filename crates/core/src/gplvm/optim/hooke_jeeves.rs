@@ -1,4 +1,5 @@
-//! Hooke-Jeeves direct search, faithful to the seed implementation.
+//! Hooke-Jeeves direct search, as Soler et al. describe and their C++
+//! implementation runs it.
 //!
 //! 1. Exploratory move: for each point and each coordinate, try `+step`,
 //!    else `-step`, and keep what lowers the cost; moves that would leave
@@ -28,7 +29,7 @@ pub struct HookeJeeves {
     pub initial_step: f64,
     /// Stop once the step falls below this.
     pub min_step: f64,
-    /// Step reduction factor when nothing improves (0.5 in the seed).
+    /// Step reduction factor when nothing improves (0.5 by default, as in the C++ implementation).
     pub reduction: f64,
     /// Refactorise `K` after this many accepted rank-one updates.
     pub refresh_every: u64,

@@ -67,7 +67,7 @@ pub trait Optimizer {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]
 pub enum OptimizerKind {
-    /// Hooke-Jeeves direct search with O(N^2) rank-one updates (the seed's).
+    /// Hooke-Jeeves direct search with O(N^2) rank-one updates (the paper's method).
     #[default]
     HookeJeeves,
     /// Projected L-BFGS on the analytic gradient.
