@@ -11,6 +11,7 @@
 use brdf_merl::MerlFile;
 
 use crate::error::{CoreError, Result};
+use crate::gplvm::kernel::rows_of;
 use crate::gplvm::optim::BOX;
 use crate::model::Model;
 use crate::simd::fold::ordered_blocks;
@@ -90,9 +91,7 @@ impl Model {
         };
         let q = self.q();
         let latent = self.latent();
-        let mut candidates: Vec<Vec<f64>> = (0..n)
-            .map(|i| (0..q).map(|c| latent[(i, c)]).collect())
-            .collect();
+        let mut candidates = rows_of(latent.as_ref());
         if q == 2 {
             let g = 33;
             for a in 0..g {
