@@ -11,7 +11,7 @@ use brdf_atlas_core::Model;
 use brdf_atlas_core::limits::MAX_MAP_SIDE;
 use brdf_atlas_core::render::{self, Picture};
 use brdf_atlas_core::{AlbedoMethod, DEFAULT_SAMPLES, View};
-use brdf_merl::atomic::commit_all;
+use brdf_atomic::commit_all;
 
 use crate::args;
 use crate::error::Error;

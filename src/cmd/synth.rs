@@ -4,8 +4,8 @@ use std::io::{self, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use brdf_atomic::{PendingFile, commit_all};
 use brdf_merl::Dims;
-use brdf_merl::atomic::{PendingFile, commit_all};
 use brdf_merl::synth::database;
 use brdf_merl::table::HEADER_BYTES;
 use rayon::prelude::*;

@@ -17,7 +17,6 @@
 
 pub mod albedo;
 pub mod angles;
-pub mod atomic;
 pub mod error;
 pub mod synth;
 pub mod table;

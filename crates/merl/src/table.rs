@@ -12,8 +12,8 @@ use std::path::{Path, PathBuf};
 use memmap2::Mmap;
 
 use crate::angles::{Dims, MAX_DIM, Vec3};
-use crate::atomic::{PendingFile, stage};
 use crate::error::{MerlError, Result};
+use brdf_atomic::{PendingFile, stage};
 
 /// Bytes of the header.
 pub const HEADER_BYTES: usize = 12;
@@ -351,7 +351,7 @@ impl MerlTable {
 
     /// Write in the MERL layout under a temporary name beside `path`; the
     /// file takes its place on [`PendingFile::commit`] (see
-    /// [`crate::atomic::commit_all`] for several files at once) and is
+    /// [`brdf_atomic::commit_all`] for several files at once) and is
     /// removed if dropped uncommitted.
     pub fn stage(&self, path: impl AsRef<Path>) -> Result<PendingFile> {
         let path = path.as_ref();

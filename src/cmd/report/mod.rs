@@ -6,7 +6,7 @@
 //! [`plan`] decides what to run, [`measure`] runs and times it, and
 //! [`csv`], [`markdown`] and [`plot`] write the results. Everything is
 //! written into a staged directory beside REPORT_DIR
-//! ([`brdf_merl::atomic::StagedDir`]), which takes REPORT_DIR's place only
+//! ([`brdf_atomic::StagedDir`]), which takes REPORT_DIR's place only
 //! when the whole report is done: a failed run leaves no partial report,
 //! and an earlier report stays until the new one is complete.
 
@@ -24,7 +24,7 @@ use std::time::{Duration, Instant};
 
 use brdf_atlas_core::Dataset;
 use brdf_atlas_core::limits::MAX_Q;
-use brdf_merl::atomic::{StagedDir, write_atomic};
+use brdf_atomic::{StagedDir, write_atomic};
 
 use self::measure::{Results, Steps};
 use self::plan::Plan;

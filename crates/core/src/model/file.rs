@@ -8,8 +8,8 @@
 
 use std::path::{Path, PathBuf};
 
+use brdf_atomic::write_atomic;
 use brdf_merl::Dims;
-use brdf_merl::atomic::write_atomic;
 use faer::MatRef;
 use serde::{Deserialize, Serialize};
 

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use brdf_merl::atomic::{Swapped, stage, swap_in};
+use brdf_atomic::{Swapped, stage, swap_in};
 
 use super::file::{ModelFile, store_path_for};
 use crate::data::{Dataset, Precision, TransformKind, build_store};
@@ -66,7 +66,7 @@ pub fn fit_dir(
     let store_path = store_path_for(model);
     // The store is built under a temporary name and takes its place only
     // once the fit has succeeded: a failed re-fit leaves the old pair intact.
-    let staging = brdf_merl::atomic::temp_path_for(&store_path);
+    let staging = brdf_atomic::temp_path_for(&store_path);
     let result = fit_staged(
         &data,
         model,
@@ -120,7 +120,7 @@ fn fit_staged(
     // store's cached pages (the file stays as it is until the new model is
     // in place), so removing it at the end is quick.
     let fit = std::thread::scope(|scope| {
-        scope.spawn(|| brdf_merl::atomic::evict_cached(store_path));
+        scope.spawn(|| brdf_atomic::evict_cached(store_path));
         options.params.fit(&gram, progress)
     })?;
     let optimise_time = t2.elapsed();

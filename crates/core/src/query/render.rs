@@ -7,7 +7,7 @@
 use std::io::Cursor;
 use std::path::Path;
 
-use brdf_merl::atomic::{PendingFile, stage};
+use brdf_atomic::{PendingFile, stage};
 use font8x8::UnicodeFonts;
 use serde::{Deserialize, Serialize};
 
@@ -255,7 +255,7 @@ fn stage_bytes(path: &Path, bytes: &[u8]) -> Result<PendingFile> {
 }
 
 /// The PNG of [`write_png`], complete on disk under a temporary name beside
-/// `path` until committed (see [`brdf_merl::atomic::commit_all`]).
+/// `path` until committed (see [`brdf_atomic::commit_all`]).
 pub fn stage_png(path: &Path, picture: &Picture, labels: bool) -> Result<PendingFile> {
     let (w, h) = (picture.map.width as u32, picture.map.height as u32);
     let data = picture.rgb8(labels);

@@ -6,7 +6,7 @@ use std::os::unix::fs::FileExt;
 use std::path::Path;
 use std::sync::Mutex;
 
-use brdf_merl::atomic::PendingFile;
+use brdf_atomic::PendingFile;
 use brdf_merl::table::{is_invalid, is_non_finite};
 use faer::linalg::matmul::triangular::{self as tri, BlockStructure};
 use faer::{Accum, Mat, MatRef, Par};

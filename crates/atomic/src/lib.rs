@@ -1,6 +1,8 @@
-//! Atomic file output: write a temporary file beside the target, sync it,
+//! Atomic file output for brdf-atlas: write a temporary file beside the target, sync it,
 //! then rename it over the target. A failed or interrupted write leaves the
 //! old file (if any) untouched and no partial file behind.
+
+#![warn(missing_docs)]
 
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
