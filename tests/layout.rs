@@ -17,6 +17,7 @@ const MAX_LINES: usize = 700;
 const ROOTS: &[&str] = &[
     "src",
     "crates/core/src",
+    "crates/atomic/src",
     "crates/merl/src",
     "crates/ffi/src",
     "crates/hostile/src",
