@@ -6,7 +6,7 @@ use std::ffi::{CStr, CString};
 use std::path::{Path, PathBuf};
 use std::ptr::{null, null_mut};
 
-use brdf_atlas::*;
+use brdf_atlas_c::*;
 use brdf_atlas_core::View;
 use brdf_atlas_core::{FitOptions, fit_dir};
 use brdf_atlas_core::{GplvmParams, Model, NoProgress, Precision, TransformKind};

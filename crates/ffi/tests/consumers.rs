@@ -6,7 +6,7 @@
 //!
 //! Where the libraries are: a package whose lib is also a `staticlib` and a
 //! `cdylib` gets all three built in one rustc run, and cargo names those
-//! outputs without a hash (`libbrdf_atlas.a`, `libbrdf_atlas.so`) in the
+//! outputs without a hash (`libbrdf_atlas_c.a`, `libbrdf_atlas_c.so`) in the
 //! `deps/` directory next to this test's executable. So the test links what
 //! the same `cargo test` just built from the same sources: no second cargo
 //! run, no install step, no stale copy from another build.
@@ -49,14 +49,14 @@ fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
-/// `deps/` of this build: where `libbrdf_atlas.a` and `.so` are.
+/// `deps/` of this build: where `libbrdf_atlas_c.a` and `.so` are.
 fn lib_dir() -> PathBuf {
     let exe = std::env::current_exe().expect("the test's own path");
     let dir = exe
         .parent()
         .expect("the test is in a directory")
         .to_path_buf();
-    for lib in ["libbrdf_atlas.a", "libbrdf_atlas.so"] {
+    for lib in ["libbrdf_atlas_c.a", "libbrdf_atlas_c.so"] {
         assert!(
             dir.join(lib).is_file(),
             "{lib} is not in {}: cargo builds the ffi crate's staticlib and cdylib there \
@@ -292,7 +292,7 @@ fn build_c(f: &Fixture) -> PathBuf {
             .arg("-I")
             .arg(repo().join("include"))
             .arg(repo().join("crates/ffi/tests/c/consumer.c"))
-            .arg(libs.join("libbrdf_atlas.a"))
+            .arg(libs.join("libbrdf_atlas_c.a"))
             .args(["-lpthread", "-ldl", "-lm", "-o"])
             .arg(&exe),
         "compiling tests/c/consumer.c",
@@ -318,7 +318,7 @@ fn build_cpp(f: &Fixture, source: &Path, name: &str) -> PathBuf {
             .arg("-I")
             .arg(repo().join("include"))
             .arg(source)
-            .arg(libs.join("libbrdf_atlas.so"))
+            .arg(libs.join("libbrdf_atlas_c.so"))
             .arg(format!("-Wl,-rpath,{}", libs.display()))
             .args(["-pthread", "-o"])
             .arg(&exe),
@@ -460,11 +460,11 @@ fn install_script_and_pkg_config_build_the_example() {
             .arg("-std=c11")
             .args(pkg(&["--cflags"]))
             .arg(repo().join("crates/ffi/tests/c/consumer.c"))
-            .arg(prefix.join("lib/libbrdf_atlas.a"))
+            .arg(prefix.join("lib/libbrdf_atlas_c.a"))
             .args(
                 pkg(&["--libs-only-l", "--static"])
                     .iter()
-                    .filter(|l| *l != "-lbrdf_atlas"),
+                    .filter(|l| *l != "-lbrdf_atlas_c"),
             )
             .arg("-o")
             .arg(&exe),
