@@ -25,7 +25,7 @@ use brdf_atlas_core::{FitOptions, fit_dir, store_path_for};
 use brdf_atlas_core::{GplvmParams, Model, NoProgress, Precision, TransformKind};
 use brdf_atlas_hostile::{merl_cases, model_cases};
 use brdf_merl::angles::direction;
-use brdf_merl::synth::database;
+use brdf_merl::synth::{self, database};
 use brdf_merl::{Dims, MerlFile, Vec3};
 
 const DIMS: Dims = Dims {
@@ -93,14 +93,8 @@ fn build_fixture() -> Fixture {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("ffi-consumers");
     let _ = std::fs::remove_dir_all(&dir);
     let data = dir.join("data");
-    std::fs::create_dir_all(&data).unwrap();
     std::fs::create_dir_all(dir.join("out")).unwrap();
-    for m in database(6, 5) {
-        m.brdf
-            .table(DIMS)
-            .write(data.join(format!("{}.binary", m.name)))
-            .unwrap();
-    }
+    synth::write_dir(&data, 6, DIMS, 5).unwrap();
     let model_path = dir.join("atlas.model");
     let options = FitOptions {
         params: GplvmParams::new(2).check().unwrap(),

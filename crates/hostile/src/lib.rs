@@ -17,8 +17,7 @@ use brdf_atlas_core::View;
 use brdf_atlas_core::render::{Picture, read_sidecar, write_sidecar};
 use brdf_atlas_core::{FitOptions, fit_dir, store_path_for};
 use brdf_atlas_core::{GplvmParams, Model, NoProgress, Precision, TransformKind};
-use brdf_merl::Dims;
-use brdf_merl::synth::database;
+use brdf_merl::{Dims, synth};
 use serde_json::{Value, json};
 
 /// The C ABI status a case must give (`BRDF_ATLAS_STATUS_...`).
@@ -213,13 +212,7 @@ pub fn merl_cases(dir: &Path) -> Vec<Case> {
 /// (data in `dir/data`, model `dir/NAME`): the same bytes on every run.
 pub fn fit_small(dir: &Path, name: &str, count: usize, dims: Dims) -> PathBuf {
     let data = dir.join("data");
-    std::fs::create_dir_all(&data).expect("data directory");
-    for m in database(count, 3) {
-        m.brdf
-            .table(dims)
-            .write(data.join(format!("{}.binary", m.name)))
-            .expect("write a table");
-    }
+    synth::write_dir(&data, count, dims, 3).expect("write the tables");
     let model = dir.join(name);
     let options = FitOptions {
         params: GplvmParams::new(2).check().expect("default parameters"),
