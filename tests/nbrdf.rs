@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 
 use brdf_atlas_core::render::read_sidecar;
 use brdf_merl::MerlFile;
-use common::{binaries, brdf_atlas, fit, header_dims, point_after_at, reported, texts};
+use common::{binaries, brdf_atlas, fit, header_dims, map, point_after_at, reported, texts};
 
 /// The data directory and its `.binary` files, at least `min` of them; a
 /// test failure when the variable is unset or the directory has too few.
@@ -87,14 +87,7 @@ fn fit_map_reconstruct_and_locate_nbrdf_materials() {
 
     // A small map: PNG, sidecar with every material.
     let png_path = work.path().join("map.png");
-    let out = brdf_atlas([
-        Path::new("map"),
-        &model,
-        Path::new("-o"),
-        &png_path,
-        Path::new("--size"),
-        Path::new("64"),
-    ]);
+    let out = map(&model, &png_path, &[&"--size", &"64"]);
     assert!(out.status.success(), "map: {}", texts(&out).1);
     let sidecar = read_sidecar(&work.path().join("map.json")).unwrap();
     assert_eq!((sidecar.width, sidecar.height), (64, 64));

@@ -15,6 +15,7 @@
 //! `c_consumer_under_valgrind`; `tests/valgrind.supp` says what it
 //! suppresses: rayon's pool threads, alive at exit by design).
 
+use std::ffi::OsString;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -268,28 +269,42 @@ fn compiler(var: &str, default: &str) -> String {
     std::env::var(var).unwrap_or_else(|_| default.to_string())
 }
 
-/// The C consumer, linked with the static library.
-fn build_c(f: &Fixture) -> PathBuf {
-    let exe = f.dir.join("consumer-c");
-    let libs = lib_dir();
+/// `source` compiled by `compiler` in language standard `std` against
+/// include/, every warning an error, and linked with `link` into `exe`.
+fn compile(compiler: String, std: &str, source: &Path, link: &[OsString], exe: &Path) {
     run(
-        Command::new(compiler("CC", "cc"))
+        Command::new(compiler)
+            .arg(std)
             .args([
-                "-std=c11",
                 "-O1",
                 "-g",
                 "-Wall",
                 "-Wextra",
                 "-pedantic",
                 "-Werror",
+                "-I",
             ])
-            .arg("-I")
             .arg(repo().join("include"))
-            .arg(repo().join("crates/ffi/tests/c/consumer.c"))
-            .arg(libs.join("libbrdf_atlas_c.a"))
-            .args(["-lpthread", "-ldl", "-lm", "-o"])
-            .arg(&exe),
-        "compiling tests/c/consumer.c",
+            .arg(source)
+            .args(link)
+            .arg("-o")
+            .arg(exe),
+        &format!("compiling {}", source.display()),
+    );
+}
+
+/// The C consumer, linked with the static library.
+fn build_c(f: &Fixture) -> PathBuf {
+    let exe = f.dir.join("consumer-c");
+    let link = [lib_dir().join("libbrdf_atlas_c.a").into_os_string()]
+        .into_iter()
+        .chain(["-lpthread", "-ldl", "-lm"].map(OsString::from));
+    compile(
+        compiler("CC", "cc"),
+        "-std=c11",
+        &repo().join("crates/ffi/tests/c/consumer.c"),
+        &link.collect::<Vec<_>>(),
+        &exe,
     );
     exe
 }
@@ -298,26 +313,12 @@ fn build_c(f: &Fixture) -> PathBuf {
 fn build_cpp(f: &Fixture, source: &Path, name: &str) -> PathBuf {
     let exe = f.dir.join(name);
     let libs = lib_dir();
-    run(
-        Command::new(compiler("CXX", "c++"))
-            .args([
-                "-std=c++17",
-                "-O1",
-                "-g",
-                "-Wall",
-                "-Wextra",
-                "-pedantic",
-                "-Werror",
-            ])
-            .arg("-I")
-            .arg(repo().join("include"))
-            .arg(source)
-            .arg(libs.join("libbrdf_atlas_c.so"))
-            .arg(format!("-Wl,-rpath,{}", libs.display()))
-            .args(["-pthread", "-o"])
-            .arg(&exe),
-        &format!("compiling {}", source.display()),
-    );
+    let link = [
+        libs.join("libbrdf_atlas_c.so").into_os_string(),
+        format!("-Wl,-rpath,{}", libs.display()).into(),
+        "-pthread".into(),
+    ];
+    compile(compiler("CXX", "c++"), "-std=c++17", source, &link, &exe);
     exe
 }
 
