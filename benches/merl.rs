@@ -4,7 +4,7 @@
 //! synthetic database, written to a temporary directory; after the first
 //! iteration the file is in the page cache, so reads are warm.
 //!
-//! Run with `cargo bench --bench merl`; the README's performance table
+//! Run with `cargo bench --bench merl`; the performance table in docs/performance.md
 //! quotes the medians criterion writes to `target/criterion/*/new/estimates.json`.
 
 use std::hint::black_box;

@@ -7,7 +7,7 @@
 # - copies the plugin's own files (the map widget, BRDFReconstructed, the
 #   glue, the C headers) into BRDF_SRC_DIR/src/brdf/brdf-atlas/, and writes
 #   brdf-atlas-paths.pri there with LIBDIR, the directory holding
-#   libbrdf_atlas.so (default: this workspace's target/release, or
+#   libbrdf_atlas_c.so (default: this workspace's target/release, or
 #   $CARGO_TARGET_DIR/release);
 # - inserts our own lines (each ends with "// brdf-atlas" or "# brdf-atlas")
 #   after named anchor lines of four upstream files. Nothing upstream is
@@ -29,7 +29,7 @@ libdir=$(cd "$libdir" 2>/dev/null && pwd) || { echo "apply.sh: $libdir: no such 
 for f in brdf.pro ParameterWindow.h ParameterWindow.cpp MainWindow.cpp BRDFMeasuredMERL.h; do
     [ -f "$src/$f" ] || { echo "apply.sh: $src/$f: missing; is $1 a wdas/brdf checkout?" >&2; exit 1; }
 done
-[ -f "$libdir/libbrdf_atlas.so" ] || echo "apply.sh: note: $libdir/libbrdf_atlas.so does not exist yet (cargo build --release -p brdf-atlas-ffi)" >&2
+[ -f "$libdir/libbrdf_atlas_c.so" ] || echo "apply.sh: note: $libdir/libbrdf_atlas_c.so does not exist yet (cargo build --release -p brdf-atlas-ffi)" >&2
 
 # Insertions: FILE, ANCHOR (a whole line, matched exactly after trimming
 # trailing whitespace), LINE to insert after it. All checked before any write.
@@ -91,5 +91,5 @@ PY
 dest=$src/brdf-atlas
 mkdir -p "$dest"
 cp "$here"/widget/AtlasMapWidget.{h,cpp} "$here"/brdf-explorer/*.{h,cpp,pri} "$root"/include/brdf_atlas.{h,hpp} "$dest"/
-printf '# Written by cpp-plugin/apply.sh: where libbrdf_atlas.so is.\nBRDF_ATLAS_LIBDIR = %s\n' "$libdir" > "$dest/brdf-atlas-paths.pri"
+printf '# Written by cpp-plugin/apply.sh: where libbrdf_atlas_c.so is.\nBRDF_ATLAS_LIBDIR = %s\n' "$libdir" > "$dest/brdf-atlas-paths.pri"
 echo "apply.sh: plugin files in $dest (library from $libdir)"

@@ -1,7 +1,7 @@
 /*
  * brdf_atlas.h: the C API of brdf-atlas, a latent map of measured BRDFs.
  *
- * Conventions (the README's "Using it from C and C++" says more):
+ * Conventions (crates/ffi/README.md says more):
  * - Handles: brdf_atlas_model_open gives a BrdfAtlasModel * that the caller
  *   owns and releases with brdf_atlas_model_free (NULL is fine). A handle is
  *   immutable: any number of threads may use one handle at once.
@@ -18,7 +18,7 @@
  *   BRDF_ATLAS_STATUS_INVALID_ARGUMENT. The fitted materials lie in the box
  *   [-1, 1]^2; points outside it are answered (the blend fades to the mean).
  *
- * Link with -lbrdf_atlas (pkg-config: brdf_atlas).
+ * Link with -lbrdf_atlas_c (pkg-config: brdf_atlas).
  */
 
 #ifndef BRDF_ATLAS_H
@@ -30,15 +30,64 @@
 #include <stdint.h>
 
 /**
- * The largest quadrature sample count a map accepts (2^24): more would only
- * take hours.
+ * The library's version as a string literal, "MAJOR.MINOR.PATCH": what
+ * brdf_atlas_version() returns when the library matches this header.
  */
-#define BRDF_ATLAS_MAX_SAMPLES (1 << 24)
+#define BRDF_ATLAS_VERSION \
+    BRDF_ATLAS_STRINGIFY(BRDF_ATLAS_VERSION_MAJOR) "." \
+    BRDF_ATLAS_STRINGIFY(BRDF_ATLAS_VERSION_MINOR) "." \
+    BRDF_ATLAS_STRINGIFY(BRDF_ATLAS_VERSION_PATCH)
+#define BRDF_ATLAS_STRINGIFY(x) BRDF_ATLAS_STRINGIFY_(x)
+#define BRDF_ATLAS_STRINGIFY_(x) #x
+
+/**
+ * The library's major version (`MAJOR` of "MAJOR.MINOR.PATCH").
+ */
+#define BRDF_ATLAS_VERSION_MAJOR 0
+
+/**
+ * The library's minor version.
+ */
+#define BRDF_ATLAS_VERSION_MINOR 1
+
+/**
+ * The library's patch version.
+ */
+#define BRDF_ATLAS_VERSION_PATCH 0
+
+/**
+ * The largest latent dimension of a model: a latent point has at most this
+ * many coordinates.
+ */
+#define BRDF_ATLAS_MAX_Q 16
+
+/**
+ * The largest number of materials of a model.
+ */
+#define BRDF_ATLAS_MAX_MATERIALS (1 << 20)
+
+/**
+ * The largest absolute latent coordinate a model file holds (its fitted
+ * materials lie in [-1, 1] on every axis).
+ */
+#define BRDF_ATLAS_LATENT_LIMIT 1e3
 
 /**
  * The largest side, in pixels, of an albedo map.
  */
 #define BRDF_ATLAS_MAX_MAP_SIDE 16384
+
+/**
+ * Half-width of the default view of a map (`brdf_atlas_model_view`): the
+ * view is [-w, w]^2 around the fitted materials' box [-1, 1]^2.
+ */
+#define BRDF_ATLAS_DEFAULT_VIEW_HALF_WIDTH 1.1
+
+/**
+ * The largest quadrature sample count a map accepts (2^24): more would only
+ * take hours.
+ */
+#define BRDF_ATLAS_MAX_SAMPLES (1 << 24)
 
 /**
  * What a call did. Every fallible function returns one; the numbers are

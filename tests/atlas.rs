@@ -10,7 +10,7 @@ use brdf_atlas_core::AlbedoMethod;
 use brdf_atlas_core::Model;
 use brdf_atlas_core::render::read_sidecar;
 use brdf_merl::{MerlFile, angles::direction};
-use common::{binaries, brdf_atlas, fit, point_after_at, synth, texts};
+use common::{binaries, brdf_atlas, fit, map, point_after_at, synth, texts};
 
 const DIMS: &str = "16,16,32";
 
@@ -492,18 +492,11 @@ fn map_writes_png_exr_and_a_sidecar() {
     let fx = Fixture::new(6, &[]);
     let png_path = fx.path("map.png");
     let exr = fx.path("map.exr");
-    let out = brdf_atlas([
-        Path::new("map"),
+    let out = map(
         &fx.model(),
-        Path::new("-o"),
         &png_path,
-        Path::new("--exr"),
-        &exr,
-        Path::new("--size"),
-        Path::new("48"),
-        Path::new("--samples"),
-        Path::new("64"),
-    ]);
+        &[&"--exr", &exr, &"--size", &"48", &"--samples", &"64"],
+    );
     let (stdout, stderr) = texts(&out);
     assert!(out.status.success(), "{stderr}");
     assert!(stdout.contains("quadrature"), "{stdout}");
@@ -532,21 +525,21 @@ fn map_of_a_raw_model_is_linear_and_honours_its_options() {
     let png_path = fx.path("raw.png");
     let json = fx.path("side/car.json");
     std::fs::create_dir(fx.path("side")).unwrap();
-    let out = brdf_atlas([
-        Path::new("map"),
+    let out = map(
         &fx.model(),
-        Path::new("-o"),
         &png_path,
-        Path::new("--json"),
-        &json,
-        Path::new("--size"),
-        Path::new("40"),
-        Path::new("--contours"),
-        Path::new("3"),
-        Path::new("--view"),
-        Path::new("-0.5,0.5,-1,0"),
-        Path::new("--no-labels"),
-    ]);
+        &[
+            &"--json",
+            &json,
+            &"--size",
+            &"40",
+            &"--contours",
+            &"3",
+            &"--view",
+            &"-0.5,0.5,-1,0",
+            &"--no-labels",
+        ],
+    );
     let (stdout, stderr) = texts(&out);
     assert!(out.status.success(), "{stderr}");
     assert!(stdout.contains("linear"), "{stdout}");
@@ -565,14 +558,7 @@ fn map_of_a_raw_model_is_linear_and_honours_its_options() {
     );
     assert!(sidecar.contour_levels.len() <= 3);
 
-    let out = brdf_atlas([
-        Path::new("map"),
-        &fx.model(),
-        Path::new("-o"),
-        &png_path,
-        Path::new("--view"),
-        Path::new("1,-1,0,1"),
-    ]);
+    let out = map(&fx.model(), &png_path, &[&"--view", &"1,-1,0,1"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(texts(&out).1.contains("--view expects four numbers"));
 }
@@ -581,14 +567,7 @@ fn map_of_a_raw_model_is_linear_and_honours_its_options() {
 fn map_needs_a_two_dimensional_model() {
     let fx = Fixture::new(5, &["--q", "3", "--transform", "raw"]);
     let png_path = fx.path("map.png");
-    let out = brdf_atlas([
-        Path::new("map"),
-        &fx.model(),
-        Path::new("-o"),
-        &png_path,
-        Path::new("--size"),
-        Path::new("16"),
-    ]);
+    let out = map(&fx.model(), &png_path, &[&"--size", &"16"]);
     assert_one_error_line(&out, &["model.atlas", "2-D latent space", "q = 3"]);
     assert!(!png_path.exists() && !fx.path("map.json").exists());
 }

@@ -13,7 +13,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{brdf_atlas, fit, synth, texts};
+use common::{fit, map, synth, texts};
 
 /// The committed reference.
 const REFERENCE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/golden/map-small.png");
@@ -99,15 +99,7 @@ fn draw_small_map(dir: &Path) -> PathBuf {
     let model = dir.join("small.atlas");
     fit(&data, &model, &[]);
     let png_path = dir.join("map-small.png");
-    let out = brdf_atlas([
-        Path::new("map"),
-        &model,
-        Path::new("-o"),
-        &png_path,
-        Path::new("--size"),
-        Path::new("64"),
-        Path::new("--no-labels"),
-    ]);
+    let out = map(&model, &png_path, &[&"--size", &"64", &"--no-labels"]);
     assert!(out.status.success(), "map: {}", texts(&out).1);
     png_path
 }

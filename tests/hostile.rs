@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use brdf_atlas_hostile::{Case, merl_cases, model_cases};
-use common::{binaries, brdf_atlas, fit, synth, texts};
+use common::{binaries, brdf_atlas, fit, map, synth, texts};
 
 /// Exit status 1 and one line, `error: ...`, that `case` accepts.
 fn assert_refused(out: &Output, case: &Case, what: &str) {
@@ -101,12 +101,11 @@ fn a_directory_given_as_a_merl_file_is_named() {
     let sub = dir.path().join("a-directory.binary");
     std::fs::create_dir(&sub).unwrap();
     let out = brdf_atlas([Path::new("info"), &sub]);
-    let case = Case {
-        path: sub.clone(),
-        names: sub,
-        want: "is a directory, expected a MERL .binary file".into(),
-        status: brdf_atlas_hostile::Status::Io,
-    };
+    let case = Case::new(
+        sub,
+        "is a directory, expected a MERL .binary file",
+        brdf_atlas_hostile::Status::Io,
+    );
     assert_refused(&out, &case, "info");
 }
 
@@ -137,12 +136,11 @@ fn a_data_directory_names_what_it_leaves_out() {
     std::fs::create_dir(&empty).unwrap();
     std::fs::write(empty.join("notes.txt"), "not a table").unwrap();
     let out = brdf_atlas([Path::new("fit"), &empty, Path::new("-o"), &model]);
-    let case = Case {
-        path: empty.clone(),
-        names: empty,
-        want: "no .binary MERL files found".into(),
-        status: brdf_atlas_hostile::Status::BadFile,
-    };
+    let case = Case::new(
+        empty,
+        "no .binary MERL files found",
+        brdf_atlas_hostile::Status::BadFile,
+    );
     assert_refused(&out, &case, "fit");
 }
 
@@ -168,7 +166,7 @@ fn every_broken_model_or_store_is_one_named_error() {
         // Every command opens a model the same way: the others on a few.
         if k % 8 == 0 {
             let png = dir.path().join("never.png");
-            let out = brdf_atlas([Path::new("map"), &case.path, Path::new("-o"), &png]);
+            let out = map(&case.path, &png, &[]);
             assert_refused(&out, case, "map");
             assert!(!png.exists());
             let out = brdf_atlas([
@@ -304,20 +302,20 @@ fn a_failed_map_keeps_all_three_old_files() {
     // nothing replaced.
     let side = dir.path().join("side.json");
     std::fs::create_dir(&side).unwrap();
-    let out = brdf_atlas([
-        Path::new("map"),
+    let out = map(
         &model,
-        Path::new("-o"),
         &png,
-        Path::new("--exr"),
-        &exr,
-        Path::new("--json"),
-        &side,
-        Path::new("--size"),
-        Path::new("16"),
-        Path::new("--samples"),
-        Path::new("16"),
-    ]);
+        &[
+            &"--exr",
+            &exr,
+            &"--json",
+            &side,
+            &"--size",
+            &"16",
+            &"--samples",
+            &"16",
+        ],
+    );
     assert_failed_writing(&out, "side.json");
     assert!(
         texts(&out).1.contains("is a directory"),

@@ -2,8 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use brdf_merl::Dims;
-use brdf_merl::synth::database;
+use brdf_merl::{Dims, synth};
 
 /// The MERL directory named by `BRDF_ATLAS_NBRDF_DIR`, or else 16 synthetic
 /// materials at 90 x 90 x 180 written under `tmp`.
@@ -12,12 +11,6 @@ pub fn data_dir(tmp: &Path) -> PathBuf {
         return PathBuf::from(dir);
     }
     let dir = tmp.join("merl");
-    std::fs::create_dir_all(&dir).expect("temporary directory");
-    for m in database(16, 1) {
-        m.brdf
-            .table(Dims::MERL)
-            .write(dir.join(format!("{}.binary", m.name)))
-            .expect("write input");
-    }
+    synth::write_dir(&dir, 16, Dims::MERL, 1).expect("write the input");
     dir
 }

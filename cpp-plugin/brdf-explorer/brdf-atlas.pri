@@ -16,4 +16,4 @@ SOURCES += \
     $$PWD/AtlasGlue.cpp \
     $$PWD/BRDFReconstructed.cpp
 CONFIG += c++17
-LIBS += -L$$BRDF_ATLAS_LIBDIR -lbrdf_atlas -Wl,-rpath,$$BRDF_ATLAS_LIBDIR
+LIBS += -L$$BRDF_ATLAS_LIBDIR -lbrdf_atlas_c -Wl,-rpath,$$BRDF_ATLAS_LIBDIR

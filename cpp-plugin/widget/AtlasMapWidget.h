@@ -99,8 +99,10 @@ public:
     BrdfAtlasView mapWindow() const { return mapWindow_; }
     const QVector<QLineF> &contours() const { return contours_; }
     bool mapPending() const;
-    /// The largest side, in pixels, of a computed map (the image is scaled up beyond).
+    /// The largest side, in pixels, of a computed map (the image is scaled up
+    /// beyond): a preview resolution, well within the library's limit.
     static constexpr int kMaxMapSide = 384;
+    static_assert(kMaxMapSide <= BRDF_ATLAS_MAX_MAP_SIDE, "a map side the library accepts");
     /// Contour levels drawn.
     static constexpr int kContourLevels = 12;
 
@@ -142,7 +144,8 @@ private:
     std::shared_ptr<const brdf_atlas::Model> model_;
     QStringList names_;
     QVector<QPointF> points_;
-    BrdfAtlasView defaultWindow_{-1.1, 1.1, -1.1, 1.1};
+    BrdfAtlasView defaultWindow_{-BRDF_ATLAS_DEFAULT_VIEW_HALF_WIDTH, BRDF_ATLAS_DEFAULT_VIEW_HALF_WIDTH,
+                                 -BRDF_ATLAS_DEFAULT_VIEW_HALF_WIDTH, BRDF_ATLAS_DEFAULT_VIEW_HALF_WIDTH};
     QPointF centre_{0, 0};
     double scale_ = 0.01;
     bool userMoved_ = false;  // zoomed or panned: a resize keeps the window

@@ -4,7 +4,7 @@
 #     cargo build --release -p brdf-atlas-ffi
 #     bash crates/ffi/install.sh PREFIX [BUILD_DIR]
 #
-# copies libbrdf_atlas.a and libbrdf_atlas.so from BUILD_DIR (default
+# copies libbrdf_atlas_c.a and libbrdf_atlas_c.so from BUILD_DIR (default
 # ${CARGO_TARGET_DIR:-target}/release) to PREFIX/lib, brdf_atlas.h and
 # brdf_atlas.hpp to PREFIX/include, and writes PREFIX/lib/pkgconfig/brdf_atlas.pc
 # from crates/ffi/brdf_atlas.pc.in. Then, with PKG_CONFIG_PATH=PREFIX/lib/pkgconfig:
@@ -23,15 +23,15 @@ mkdir -p "$1"
 prefix=$(cd "$1" && pwd)
 version=$(sed -n 's/^version = "\(.*\)"/\1/p' "$root/Cargo.toml" | head -n 1)
 
-for lib in libbrdf_atlas.a libbrdf_atlas.so; do
+for lib in libbrdf_atlas_c.a libbrdf_atlas_c.so; do
     if [ ! -f "$build/$lib" ]; then
         echo "error: $build/$lib not found: run cargo build --release -p brdf-atlas-ffi first" >&2
         exit 1
     fi
 done
 mkdir -p "$prefix/lib/pkgconfig" "$prefix/include"
-install -m 644 "$build/libbrdf_atlas.a" "$prefix/lib/"
-install -m 755 "$build/libbrdf_atlas.so" "$prefix/lib/"
+install -m 644 "$build/libbrdf_atlas_c.a" "$prefix/lib/"
+install -m 755 "$build/libbrdf_atlas_c.so" "$prefix/lib/"
 install -m 644 "$root/include/brdf_atlas.h" "$root/include/brdf_atlas.hpp" "$prefix/include/"
 sed -e "s|@PREFIX@|$prefix|" -e "s|@VERSION@|$version|" "$here/brdf_atlas.pc.in" \
     > "$prefix/lib/pkgconfig/brdf_atlas.pc"

@@ -1,6 +1,7 @@
 //! Helpers shared by the end-to-end tests: run the real binary, read its report.
 #![allow(dead_code)] // each test file uses its own subset
 
+use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -93,19 +94,21 @@ pub fn binaries(dir: &Path) -> Vec<PathBuf> {
     files
 }
 
-/// Synthesise `count` materials of `dims` (`"16,16,32"`) with `seed` into `dir`.
+/// Write `count` synthetic materials of `dims` (`"16,16,32"`) with `seed`
+/// into `dir`: the files `brdf-atlas synth` writes with these arguments.
 pub fn synth(dir: &Path, count: usize, dims: &str, seed: u64) {
-    let out = brdf_atlas([
-        "synth",
-        "--count",
-        &count.to_string(),
-        "--dims",
-        dims,
-        "--seed",
-        &seed.to_string(),
-        dir.to_str().expect("UTF-8 temp path"),
-    ]);
-    assert!(out.status.success(), "synth: {}", texts(&out).1);
+    let n: Vec<usize> = dims
+        .split(',')
+        .map(|d| d.parse().expect("dims are numbers"))
+        .collect();
+    let dims = brdf_merl::Dims::new(n[0], n[1], n[2]).expect("valid dims");
+    brdf_merl::synth::write_dir(dir, count, dims, seed).expect("synthesise");
+}
+
+/// Run `brdf-atlas map MODEL -o PNG` with `extra` arguments.
+pub fn map(model: &Path, png: &Path, extra: &[&dyn AsRef<OsStr>]) -> Output {
+    let head: [&dyn AsRef<OsStr>; 4] = [&"map", &model, &"-o", &png];
+    brdf_atlas(head.iter().chain(extra).map(|a| a.as_ref()))
 }
 
 /// Fit the materials of `data` into `model` with `extra` arguments; returns stdout.

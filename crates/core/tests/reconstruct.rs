@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use brdf_atlas_core::{FitOptions, Rows, fit_dir};
 use brdf_atlas_core::{GplvmParams, Model, NoProgress, Precision, TransformKind};
-use brdf_merl::synth::{Analytic, database};
+use brdf_merl::synth::{self, Analytic, database};
 use brdf_merl::{Dims, INVALID, MerlFile, MerlTable, Quadrature};
 use faer::Mat;
 use faer::linalg::solvers::DenseSolveCore;
@@ -18,13 +18,7 @@ const DIMS: Dims = Dims {
 fn fit(dir: &Path, transform: TransformKind, precision: Precision) -> PathBuf {
     let data = dir.join("data");
     if !data.exists() {
-        std::fs::create_dir_all(&data).unwrap();
-        for m in database(8, 3) {
-            m.brdf
-                .table(DIMS)
-                .write(data.join(format!("{}.binary", m.name)))
-                .unwrap();
-        }
+        synth::write_dir(&data, 8, DIMS, 3).unwrap();
     }
     let model = dir.join(format!("{}-{}.atlas", transform.name(), precision.name()));
     let options = FitOptions {

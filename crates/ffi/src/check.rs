@@ -4,7 +4,6 @@ use std::ffi::{CStr, c_char};
 
 use brdf_atlas_core::Model;
 
-use crate::model::BrdfAtlasModel;
 use crate::status::{BrdfAtlasStatus, Failure, Result};
 
 fn null(name: &str) -> Failure {
@@ -22,17 +21,17 @@ fn aligned<T>(p: *const T, name: &str) -> Result<()> {
     }
 }
 
-/// The model behind a handle.
+/// A single input passed by pointer.
 ///
 /// # Safety
-/// `p` is NULL or a handle from `brdf_atlas_model_open` not yet freed.
-pub(crate) unsafe fn model<'a>(p: *const BrdfAtlasModel) -> Result<&'a Model> {
+/// `p` is NULL or valid for reading one `T`.
+pub(crate) unsafe fn borrowed<'a, T>(p: *const T, name: &str) -> Result<&'a T> {
     if p.is_null() {
-        return Err(null("model"));
+        return Err(null(name));
     }
-    aligned(p, "model")?;
-    // SAFETY: the caller promises a live handle.
-    Ok(unsafe { &(*p).model })
+    aligned(p, name)?;
+    // SAFETY: non-NULL and aligned; the caller promises it is readable.
+    Ok(unsafe { &*p })
 }
 
 /// A single out-parameter.

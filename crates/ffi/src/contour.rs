@@ -31,7 +31,7 @@ pub struct BrdfAtlasSegment {
 /// # Safety
 /// `rgb` is NULL or valid for reading `width * height * 3` floats.
 unsafe fn map_from(rgb: *const f32, width: usize, height: usize) -> Result<AlbedoMap> {
-    let max = crate::query::BRDF_ATLAS_MAX_MAP_SIDE;
+    let max = crate::consts::BRDF_ATLAS_MAX_MAP_SIDE;
     if width == 0 || height == 0 || width > max || height > max {
         return Err(Failure::invalid(format!(
             "map size {width}x{height} must be between 1 and {max} a side"

@@ -5,8 +5,8 @@
 //!
 //! The header `include/brdf_atlas.h` is generated from this crate by
 //! cbindgen (`tests/header.rs` checks it is current);
-//! `include/brdf_atlas.hpp` wraps it for C++17. Conventions, as in the
-//! README's "Using it from C and C++":
+//! `include/brdf_atlas.hpp` wraps it for C++17. Conventions, as in
+//! crates/ffi/README.md:
 //!
 //! - **Handles.** `brdf_atlas_model_open` gives a `BrdfAtlasModel *` the
 //!   caller owns; `brdf_atlas_model_free` releases it (NULL is fine). A
@@ -25,7 +25,7 @@
 //!
 //! ```
 //! use std::ffi::CStr;
-//! use brdf_atlas::{BrdfAtlasStatus, brdf_atlas_last_error_message, brdf_atlas_model_open};
+//! use brdf_atlas_c::{BrdfAtlasStatus, brdf_atlas_last_error_message, brdf_atlas_model_open};
 //!
 //! let mut model = std::ptr::null_mut();
 //! let status = unsafe { brdf_atlas_model_open(c"missing.atlas".as_ptr(), &mut model) };
@@ -37,11 +37,17 @@
 #![warn(missing_docs)]
 
 mod check;
+pub mod consts;
 pub mod contour;
 pub mod model;
 pub mod query;
 pub mod status;
 
+pub use consts::{
+    BRDF_ATLAS_DEFAULT_VIEW_HALF_WIDTH, BRDF_ATLAS_LATENT_LIMIT, BRDF_ATLAS_MAX_MAP_SIDE,
+    BRDF_ATLAS_MAX_MATERIALS, BRDF_ATLAS_MAX_Q, BRDF_ATLAS_MAX_SAMPLES, BRDF_ATLAS_VERSION_MAJOR,
+    BRDF_ATLAS_VERSION_MINOR, BRDF_ATLAS_VERSION_PATCH,
+};
 pub use contour::{BrdfAtlasSegment, brdf_atlas_contour_levels, brdf_atlas_contours};
 pub use model::{
     BrdfAtlasDims, BrdfAtlasModel, BrdfAtlasView, brdf_atlas_model_dims, brdf_atlas_model_free,
@@ -50,10 +56,9 @@ pub use model::{
     brdf_atlas_model_view,
 };
 pub use query::{
-    BRDF_ATLAS_MAX_MAP_SIDE, BRDF_ATLAS_MAX_SAMPLES, BrdfAtlasLocation,
-    brdf_atlas_model_albedo_map, brdf_atlas_model_eval, brdf_atlas_model_eval_batch,
-    brdf_atlas_model_locate, brdf_atlas_model_reconstruct, brdf_atlas_model_reconstruct_to_file,
-    brdf_atlas_model_weights,
+    BrdfAtlasLocation, brdf_atlas_model_albedo_map, brdf_atlas_model_eval,
+    brdf_atlas_model_eval_batch, brdf_atlas_model_locate, brdf_atlas_model_reconstruct,
+    brdf_atlas_model_reconstruct_to_file, brdf_atlas_model_weights,
 };
 pub use status::{
     BrdfAtlasStatus, brdf_atlas_last_error_message, brdf_atlas_status_message, brdf_atlas_version,

@@ -6,7 +6,7 @@ use brdf_atlas_core::Model;
 use brdf_atlas_core::View;
 
 use crate::check;
-use crate::status::{BrdfAtlasStatus, Failure, run};
+use crate::status::{BrdfAtlasStatus, Failure, Result, run};
 
 /// An opened model: the fitted latent space and its memory-mapped store.
 ///
@@ -22,6 +22,15 @@ const _: () = {
     const fn shareable<T: Send + Sync>() {}
     shareable::<BrdfAtlasModel>()
 };
+
+/// The model behind a handle.
+///
+/// # Safety
+/// `p` is NULL or a handle from `brdf_atlas_model_open` not yet freed.
+pub(crate) unsafe fn borrow<'a>(p: *const BrdfAtlasModel) -> Result<&'a Model> {
+    // SAFETY: the caller promises a live handle.
+    unsafe { check::borrowed(p, "model") }.map(|h| &h.model)
+}
 
 /// A window of the latent plane: x in [x0, x1], y in [y0, y1], y up.
 #[repr(C)]
@@ -132,7 +141,7 @@ pub unsafe extern "C" fn brdf_atlas_model_latent_dim(
     q: *mut usize,
 ) -> BrdfAtlasStatus {
     run("brdf_atlas_model_latent_dim", || {
-        let m = unsafe { check::model(model) }?;
+        let m = unsafe { borrow(model) }?;
         let q = unsafe { check::out(q, "q") }?;
         *q = m.q();
         Ok(())
@@ -152,7 +161,7 @@ pub unsafe extern "C" fn brdf_atlas_model_material_count(
     count: *mut usize,
 ) -> BrdfAtlasStatus {
     run("brdf_atlas_model_material_count", || {
-        let m = unsafe { check::model(model) }?;
+        let m = unsafe { borrow(model) }?;
         let count = unsafe { check::out(count, "count") }?;
         *count = m.names().len();
         Ok(())
@@ -184,7 +193,7 @@ pub unsafe extern "C" fn brdf_atlas_model_material_name(
     name_len: *mut usize,
 ) -> BrdfAtlasStatus {
     run("brdf_atlas_model_material_name", || {
-        let m = unsafe { check::model(model) }?;
+        let m = unsafe { borrow(model) }?;
         let name_len = unsafe { check::out(name_len, "name_len") }?;
         let name = m.names().get(index).ok_or_else(|| {
             Failure::invalid(format!(
@@ -224,7 +233,7 @@ pub unsafe extern "C" fn brdf_atlas_model_latent_point(
     len: usize,
 ) -> BrdfAtlasStatus {
     run("brdf_atlas_model_latent_point", || {
-        let m = unsafe { check::model(model) }?;
+        let m = unsafe { borrow(model) }?;
         let n = m.names().len();
         if index >= n {
             return Err(Failure::invalid(format!(
@@ -252,7 +261,7 @@ pub unsafe extern "C" fn brdf_atlas_model_view(
     view: *mut BrdfAtlasView,
 ) -> BrdfAtlasStatus {
     run("brdf_atlas_model_view", || {
-        let _ = unsafe { check::model(model) }?;
+        let _ = unsafe { borrow(model) }?;
         let view = unsafe { check::out(view, "view") }?;
         *view = View::default().into();
         Ok(())
@@ -271,7 +280,7 @@ pub unsafe extern "C" fn brdf_atlas_model_dims(
     dims: *mut BrdfAtlasDims,
 ) -> BrdfAtlasStatus {
     run("brdf_atlas_model_dims", || {
-        let m = unsafe { check::model(model) }?;
+        let m = unsafe { borrow(model) }?;
         let dims = unsafe { check::out(dims, "dims") }?;
         let d = m.dims();
         *dims = BrdfAtlasDims {
@@ -295,7 +304,7 @@ pub unsafe extern "C" fn brdf_atlas_model_table_len(
     len: *mut usize,
 ) -> BrdfAtlasStatus {
     run("brdf_atlas_model_table_len", || {
-        let m = unsafe { check::model(model) }?;
+        let m = unsafe { borrow(model) }?;
         let len = unsafe { check::out(len, "len") }?;
         *len = m.dims().values();
         Ok(())

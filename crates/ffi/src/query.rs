@@ -8,15 +8,9 @@ use brdf_atlas_core::{Model, NoProgress};
 use brdf_merl::{MerlFile, Vec3};
 
 use crate::check;
-use crate::model::{BrdfAtlasModel, BrdfAtlasView};
+use crate::consts::{BRDF_ATLAS_MAX_MAP_SIDE, BRDF_ATLAS_MAX_SAMPLES};
+use crate::model::{self as handle, BrdfAtlasModel, BrdfAtlasView};
 use crate::status::{BrdfAtlasStatus, Failure, Result, run};
-
-/// The largest quadrature sample count a map accepts (2^24): more would only
-/// take hours.
-pub const BRDF_ATLAS_MAX_SAMPLES: usize = 1 << 24;
-
-/// The largest side, in pixels, of an albedo map.
-pub const BRDF_ATLAS_MAX_MAP_SIDE: usize = 16384;
 
 /// Where a MERL file lands in a model's latent plane.
 #[repr(C)]
@@ -65,7 +59,7 @@ pub unsafe extern "C" fn brdf_atlas_model_reconstruct(
     written: *mut usize,
 ) -> BrdfAtlasStatus {
     run("brdf_atlas_model_reconstruct", || {
-        let m = unsafe { check::model(model) }?;
+        let m = unsafe { handle::borrow(model) }?;
         let p = check::point(m, x, y)?;
         let out = unsafe { check::buffer(buf, len, m.dims().values(), "buf") }?;
         let written = unsafe { check::optional_out(written, "written") }?;
@@ -99,7 +93,7 @@ pub unsafe extern "C" fn brdf_atlas_model_reconstruct_to_file(
     path: *const c_char,
 ) -> BrdfAtlasStatus {
     run("brdf_atlas_model_reconstruct_to_file", || {
-        let m = unsafe { check::model(model) }?;
+        let m = unsafe { handle::borrow(model) }?;
         let path = unsafe { check::path(path, "path") }?;
         let p = check::point(m, x, y)?;
         m.at(&p)?.table().write(path)?;
@@ -142,7 +136,7 @@ pub unsafe extern "C" fn brdf_atlas_model_eval(
     rgb: *mut f64,
 ) -> BrdfAtlasStatus {
     run("brdf_atlas_model_eval", || {
-        let m = unsafe { check::model(model) }?;
+        let m = unsafe { handle::borrow(model) }?;
         let wi = unsafe { check::input(wi, 3, "wi") }?;
         let wo = unsafe { check::input(wo, 3, "wo") }?;
         let out = unsafe { check::buffer(rgb, 3, 3, "rgb") }?;
@@ -182,7 +176,7 @@ pub unsafe extern "C" fn brdf_atlas_model_eval_batch(
     len: usize,
 ) -> BrdfAtlasStatus {
     run("brdf_atlas_model_eval_batch", || {
-        let m = unsafe { check::model(model) }?;
+        let m = unsafe { handle::borrow(model) }?;
         let values = check::product(&[n, 3], "3 * n")?;
         let wi = unsafe { check::input(wi, values, "wi") }?;
         let wo = unsafe { check::input(wo, values, "wo") }?;
@@ -232,7 +226,7 @@ pub unsafe extern "C" fn brdf_atlas_model_weights(
     len: usize,
 ) -> BrdfAtlasStatus {
     run("brdf_atlas_model_weights", || {
-        let m = unsafe { check::model(model) }?;
+        let m = unsafe { handle::borrow(model) }?;
         let out = unsafe { check::buffer(buf, len, m.names().len(), "buf") }?;
         let p = check::point(m, x, y)?;
         let w = m.weights_at(&p)?;
@@ -288,7 +282,7 @@ pub unsafe extern "C" fn brdf_atlas_model_albedo_map(
     len: usize,
 ) -> BrdfAtlasStatus {
     run("brdf_atlas_model_albedo_map", || {
-        let m = unsafe { check::model(model) }?;
+        let m = unsafe { handle::borrow(model) }?;
         check::planar(m)?;
         let view: View = match unsafe { check::input(view, 1, "view") } {
             Ok(v) => v[0].into(),
@@ -334,7 +328,7 @@ pub unsafe extern "C" fn brdf_atlas_model_locate(
     location: *mut BrdfAtlasLocation,
 ) -> BrdfAtlasStatus {
     run("brdf_atlas_model_locate", || {
-        let m = unsafe { check::model(model) }?;
+        let m = unsafe { handle::borrow(model) }?;
         let path = unsafe { check::path(merl_path, "merl_path") }?;
         let location = unsafe { check::out(location, "location") }?;
         check::planar(m)?;

@@ -6,23 +6,16 @@ use std::ffi::{CStr, CString};
 use std::path::{Path, PathBuf};
 use std::ptr::{null, null_mut};
 
-use brdf_atlas::*;
+use brdf_atlas_c::*;
 use brdf_atlas_core::View;
 use brdf_atlas_core::{FitOptions, fit_dir};
 use brdf_atlas_core::{GplvmParams, Model, NoProgress, Precision, TransformKind};
-use brdf_merl::Dims;
-use brdf_merl::synth::database;
+use brdf_merl::{Dims, synth};
 
 fn fit(dir: &Path, q: usize, transform: TransformKind) -> PathBuf {
     let data = dir.join("data");
     if !data.exists() {
-        std::fs::create_dir_all(&data).unwrap();
-        for m in database(5, 9) {
-            m.brdf
-                .table(Dims::new(6, 6, 12).unwrap())
-                .write(data.join(format!("{}.binary", m.name)))
-                .unwrap();
-        }
+        synth::write_dir(&data, 5, Dims::new(6, 6, 12).unwrap(), 9).unwrap();
     }
     let model = dir.join(format!("q{q}-{}.model", transform.name()));
     let options = FitOptions {

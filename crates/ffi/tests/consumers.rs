@@ -6,7 +6,7 @@
 //!
 //! Where the libraries are: a package whose lib is also a `staticlib` and a
 //! `cdylib` gets all three built in one rustc run, and cargo names those
-//! outputs without a hash (`libbrdf_atlas.a`, `libbrdf_atlas.so`) in the
+//! outputs without a hash (`libbrdf_atlas_c.a`, `libbrdf_atlas_c.so`) in the
 //! `deps/` directory next to this test's executable. So the test links what
 //! the same `cargo test` just built from the same sources: no second cargo
 //! run, no install step, no stale copy from another build.
@@ -15,6 +15,7 @@
 //! `c_consumer_under_valgrind`; `tests/valgrind.supp` says what it
 //! suppresses: rayon's pool threads, alive at exit by design).
 
+use std::ffi::OsString;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -25,7 +26,7 @@ use brdf_atlas_core::{FitOptions, fit_dir, store_path_for};
 use brdf_atlas_core::{GplvmParams, Model, NoProgress, Precision, TransformKind};
 use brdf_atlas_hostile::{merl_cases, model_cases};
 use brdf_merl::angles::direction;
-use brdf_merl::synth::database;
+use brdf_merl::synth::{self, database};
 use brdf_merl::{Dims, MerlFile, Vec3};
 
 const DIMS: Dims = Dims {
@@ -49,14 +50,14 @@ fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
-/// `deps/` of this build: where `libbrdf_atlas.a` and `.so` are.
+/// `deps/` of this build: where `libbrdf_atlas_c.a` and `.so` are.
 fn lib_dir() -> PathBuf {
     let exe = std::env::current_exe().expect("the test's own path");
     let dir = exe
         .parent()
         .expect("the test is in a directory")
         .to_path_buf();
-    for lib in ["libbrdf_atlas.a", "libbrdf_atlas.so"] {
+    for lib in ["libbrdf_atlas_c.a", "libbrdf_atlas_c.so"] {
         assert!(
             dir.join(lib).is_file(),
             "{lib} is not in {}: cargo builds the ffi crate's staticlib and cdylib there \
@@ -93,14 +94,8 @@ fn build_fixture() -> Fixture {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("ffi-consumers");
     let _ = std::fs::remove_dir_all(&dir);
     let data = dir.join("data");
-    std::fs::create_dir_all(&data).unwrap();
     std::fs::create_dir_all(dir.join("out")).unwrap();
-    for m in database(6, 5) {
-        m.brdf
-            .table(DIMS)
-            .write(data.join(format!("{}.binary", m.name)))
-            .unwrap();
-    }
+    synth::write_dir(&data, 6, DIMS, 5).unwrap();
     let model_path = dir.join("atlas.model");
     let options = FitOptions {
         params: GplvmParams::new(2).check().unwrap(),
@@ -274,28 +269,42 @@ fn compiler(var: &str, default: &str) -> String {
     std::env::var(var).unwrap_or_else(|_| default.to_string())
 }
 
-/// The C consumer, linked with the static library.
-fn build_c(f: &Fixture) -> PathBuf {
-    let exe = f.dir.join("consumer-c");
-    let libs = lib_dir();
+/// `source` compiled by `compiler` in language standard `std` against
+/// include/, every warning an error, and linked with `link` into `exe`.
+fn compile(compiler: String, std: &str, source: &Path, link: &[OsString], exe: &Path) {
     run(
-        Command::new(compiler("CC", "cc"))
+        Command::new(compiler)
+            .arg(std)
             .args([
-                "-std=c11",
                 "-O1",
                 "-g",
                 "-Wall",
                 "-Wextra",
                 "-pedantic",
                 "-Werror",
+                "-I",
             ])
-            .arg("-I")
             .arg(repo().join("include"))
-            .arg(repo().join("crates/ffi/tests/c/consumer.c"))
-            .arg(libs.join("libbrdf_atlas.a"))
-            .args(["-lpthread", "-ldl", "-lm", "-o"])
-            .arg(&exe),
-        "compiling tests/c/consumer.c",
+            .arg(source)
+            .args(link)
+            .arg("-o")
+            .arg(exe),
+        &format!("compiling {}", source.display()),
+    );
+}
+
+/// The C consumer, linked with the static library.
+fn build_c(f: &Fixture) -> PathBuf {
+    let exe = f.dir.join("consumer-c");
+    let link = [lib_dir().join("libbrdf_atlas_c.a").into_os_string()]
+        .into_iter()
+        .chain(["-lpthread", "-ldl", "-lm"].map(OsString::from));
+    compile(
+        compiler("CC", "cc"),
+        "-std=c11",
+        &repo().join("crates/ffi/tests/c/consumer.c"),
+        &link.collect::<Vec<_>>(),
+        &exe,
     );
     exe
 }
@@ -304,26 +313,12 @@ fn build_c(f: &Fixture) -> PathBuf {
 fn build_cpp(f: &Fixture, source: &Path, name: &str) -> PathBuf {
     let exe = f.dir.join(name);
     let libs = lib_dir();
-    run(
-        Command::new(compiler("CXX", "c++"))
-            .args([
-                "-std=c++17",
-                "-O1",
-                "-g",
-                "-Wall",
-                "-Wextra",
-                "-pedantic",
-                "-Werror",
-            ])
-            .arg("-I")
-            .arg(repo().join("include"))
-            .arg(source)
-            .arg(libs.join("libbrdf_atlas.so"))
-            .arg(format!("-Wl,-rpath,{}", libs.display()))
-            .args(["-pthread", "-o"])
-            .arg(&exe),
-        &format!("compiling {}", source.display()),
-    );
+    let link = [
+        libs.join("libbrdf_atlas_c.so").into_os_string(),
+        format!("-Wl,-rpath,{}", libs.display()).into(),
+        "-pthread".into(),
+    ];
+    compile(compiler("CXX", "c++"), "-std=c++17", source, &link, &exe);
     exe
 }
 
@@ -460,11 +455,11 @@ fn install_script_and_pkg_config_build_the_example() {
             .arg("-std=c11")
             .args(pkg(&["--cflags"]))
             .arg(repo().join("crates/ffi/tests/c/consumer.c"))
-            .arg(prefix.join("lib/libbrdf_atlas.a"))
+            .arg(prefix.join("lib/libbrdf_atlas_c.a"))
             .args(
                 pkg(&["--libs-only-l", "--static"])
                     .iter()
-                    .filter(|l| *l != "-lbrdf_atlas"),
+                    .filter(|l| *l != "-lbrdf_atlas_c"),
             )
             .arg("-o")
             .arg(&exe),

@@ -3,7 +3,7 @@
 
 use std::ptr::{null, null_mut};
 
-use brdf_atlas::*;
+use brdf_atlas_c::*;
 
 /// A grey map (r = g = b, so luminance = the value: the Rec. 709 weights
 /// sum to 1) with value `f(px, py)` at pixel (px, py).

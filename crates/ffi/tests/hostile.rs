@@ -9,7 +9,7 @@ use std::ffi::{CStr, CString};
 use std::path::Path;
 use std::ptr::null_mut;
 
-use brdf_atlas::*;
+use brdf_atlas_c::*;
 use brdf_atlas_hostile::{Case, Status, merl_cases, model_cases, small_model};
 
 fn status_of(s: Status) -> BrdfAtlasStatus {

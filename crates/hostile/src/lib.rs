@@ -17,8 +17,7 @@ use brdf_atlas_core::View;
 use brdf_atlas_core::render::{Picture, read_sidecar, write_sidecar};
 use brdf_atlas_core::{FitOptions, fit_dir, store_path_for};
 use brdf_atlas_core::{GplvmParams, Model, NoProgress, Precision, TransformKind};
-use brdf_merl::Dims;
-use brdf_merl::synth::database;
+use brdf_merl::{Dims, synth};
 use serde_json::{Value, json};
 
 /// The C ABI status a case must give (`BRDF_ATLAS_STATUS_...`).
@@ -46,6 +45,16 @@ pub struct Case {
 }
 
 impl Case {
+    /// A case whose error must name the file handed to the reader.
+    pub fn new(path: PathBuf, want: impl Into<String>, status: Status) -> Case {
+        Case {
+            names: path.clone(),
+            path,
+            want: want.into(),
+            status,
+        }
+    }
+
     /// Check a one-line error message against the case: it names the file,
     /// contains [`Case::want`] and is one line. `Err` says what is wrong.
     pub fn check_message(&self, message: &str) -> Result<(), String> {
@@ -88,6 +97,11 @@ fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
     path
 }
 
+/// `bytes` written to `dir/name`: a case whose error names that file.
+fn written(dir: &Path, name: &str, bytes: &[u8], want: &str, status: Status) -> Case {
+    Case::new(write(dir, name, bytes), want, status)
+}
+
 /// The 12-byte header of a MERL file of dims `a x b x c`.
 pub fn merl_header(a: i32, b: i32, c: i32) -> Vec<u8> {
     [a, b, c].iter().flat_map(|d| d.to_le_bytes()).collect()
@@ -118,15 +132,8 @@ pub fn merl_cases(dir: &Path) -> Vec<Case> {
     let bins = 4 * 4 * 8;
     let mut tiny_1024 = merl_header(1024, 1024, 1024);
     tiny_1024.extend([0u8; 64]);
-    let bad = |name: &str, bytes: &[u8], want: &str| {
-        let path = write(dir, name, bytes);
-        Case {
-            names: path.clone(),
-            path,
-            want: want.to_string(),
-            status: Status::BadMerl,
-        }
-    };
+    let bad =
+        |name: &str, bytes: &[u8], want: &str| written(dir, name, bytes, want, Status::BadMerl);
     vec![
         bad("empty.binary", b"", "0 bytes is too short for a MERL file"),
         bad("eleven-bytes.binary", &good[..11], "11 bytes is too short"),
@@ -200,12 +207,11 @@ pub fn merl_cases(dir: &Path) -> Vec<Case> {
             b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR\0\0\0\x10\0\0\0\x10\x08\x02\0\0\0",
             "expected three positive dims",
         ),
-        Case {
-            path: dir.join("missing.binary"),
-            names: dir.join("missing.binary"),
-            want: "No such file or directory".into(),
-            status: Status::Io,
-        },
+        Case::new(
+            dir.join("missing.binary"),
+            "No such file or directory",
+            Status::Io,
+        ),
     ]
 }
 
@@ -213,13 +219,7 @@ pub fn merl_cases(dir: &Path) -> Vec<Case> {
 /// (data in `dir/data`, model `dir/NAME`): the same bytes on every run.
 pub fn fit_small(dir: &Path, name: &str, count: usize, dims: Dims) -> PathBuf {
     let data = dir.join("data");
-    std::fs::create_dir_all(&data).expect("data directory");
-    for m in database(count, 3) {
-        m.brdf
-            .table(dims)
-            .write(data.join(format!("{}.binary", m.name)))
-            .expect("write a table");
-    }
+    synth::write_dir(&data, count, dims, 3).expect("write the tables");
     let model = dir.join(name);
     let options = FitOptions {
         params: GplvmParams::new(2).check().expect("default parameters"),
@@ -274,23 +274,11 @@ fn model_variant(
 pub fn model_cases(dir: &Path, model: &Path) -> Vec<Case> {
     let text = std::fs::read_to_string(model).expect("model");
     let n = Model::open(model).expect("a valid model").names().len();
-    let raw = |name: &str, bytes: &[u8], want: &str| {
-        let path = write(dir, name, bytes);
-        Case {
-            names: path.clone(),
-            path,
-            want: want.to_string(),
-            status: Status::BadFile,
-        }
-    };
+    let raw =
+        |name: &str, bytes: &[u8], want: &str| written(dir, name, bytes, want, Status::BadFile);
     let json = |name: &str, edit: &dyn Fn(&mut Value), want: &str| {
         let path = model_variant(dir, model, name, edit, |_| {});
-        Case {
-            names: path.clone(),
-            path,
-            want: want.to_string(),
-            status: Status::BadFile,
-        }
+        Case::new(path, want, Status::BadFile)
     };
     let store = |name: &str, edit: &dyn Fn(&mut Vec<u8>), want: &str| {
         let path = model_variant(dir, model, name, |_| {}, edit);
@@ -522,23 +510,11 @@ pub fn sidecar_cases(dir: &Path, good: &Path) -> Vec<Case> {
     let edited = |name: &str, edit: &dyn Fn(&mut Value), want: &str| {
         let mut v = v.clone();
         edit(&mut v);
-        let path = write(dir, name, &serde_json::to_vec_pretty(&v).expect("JSON"));
-        Case {
-            names: path.clone(),
-            path,
-            want: want.to_string(),
-            status: Status::BadFile,
-        }
+        let bytes = serde_json::to_vec_pretty(&v).expect("JSON");
+        written(dir, name, &bytes, want, Status::BadFile)
     };
-    let raw = |name: &str, bytes: &[u8], want: &str| {
-        let path = write(dir, name, bytes);
-        Case {
-            names: path.clone(),
-            path,
-            want: want.to_string(),
-            status: Status::BadFile,
-        }
-    };
+    let raw =
+        |name: &str, bytes: &[u8], want: &str| written(dir, name, bytes, want, Status::BadFile);
     vec![
         raw(
             "empty.json",

@@ -7,11 +7,14 @@
 //! database. This is the embedded default that `brdf-atlas demo` runs on.
 
 use std::f64::consts::PI;
+use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 
 use crate::angles::{Dims, HalfDiff, Vec3};
+use crate::error::{MerlError, Result};
 use crate::table::{INVALID, MerlTable, raw_from_physical};
+use brdf_atomic::{PendingFile, commit_all};
 
 /// An analytic isotropic BRDF: Lambert + GGX microfacet with Fresnel.
 #[derive(Debug, Clone, PartialEq)]
@@ -216,6 +219,38 @@ pub fn database(count: usize, seed: u64) -> Vec<SynthMaterial> {
         .collect()
 }
 
+/// Write the database of `count` materials with `seed`, tabulated at `dims`,
+/// into `dir` (created if missing): one MERL file `<name>.binary` a
+/// material. Returns the paths in database order.
+///
+/// Every file is written under a temporary name first, and all take their
+/// places only once all are written: a failed run replaces no file and
+/// leaves no partial one.
+///
+/// ```
+/// use brdf_merl::{Dims, MerlFile, synth};
+///
+/// let dir = std::env::temp_dir().join(format!("brdf-merl-doc-{}", std::process::id()));
+/// let paths = synth::write_dir(&dir, 2, Dims::new(4, 4, 8).unwrap(), 1).unwrap();
+/// assert_eq!(paths.len(), 2);
+/// assert_eq!(MerlFile::open(&paths[0]).unwrap().dims(), Dims::new(4, 4, 8).unwrap());
+/// # std::fs::remove_dir_all(&dir).unwrap();
+/// ```
+pub fn write_dir(dir: &Path, count: usize, dims: Dims, seed: u64) -> Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir).map_err(|e| MerlError::io(dir, e))?;
+    let staged = database(count, seed)
+        .par_iter()
+        .map(|m| {
+            m.brdf
+                .table(dims)
+                .stage(dir.join(format!("{}.binary", m.name)))
+        })
+        .collect::<Result<Vec<PendingFile>>>()?;
+    let paths = staged.iter().map(|f| f.target().to_path_buf()).collect();
+    commit_all(staged).map_err(|(path, e)| MerlError::io(path, e))?;
+    Ok(paths)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -312,5 +347,26 @@ mod tests {
                 "bin {bin}"
             );
         }
+    }
+
+    #[test]
+    fn write_dir_writes_the_database_tables_by_name() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("made/by/write_dir");
+        let dims = Dims::new(4, 4, 8).unwrap();
+        let paths = write_dir(&dir, 3, dims, 7).unwrap();
+        let materials = database(3, 7);
+        assert_eq!(paths.len(), 3);
+        for (path, m) in paths.iter().zip(&materials) {
+            assert_eq!(path, &dir.join(format!("{}.binary", m.name)));
+            assert_eq!(MerlTable::read(path).unwrap(), m.brdf.table(dims));
+        }
+        // Nothing else: no temporary file is left behind.
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 3);
+        // A directory in a file's place fails the run and replaces nothing.
+        let blocked = tmp.path().join("blocked");
+        std::fs::create_dir_all(blocked.join(format!("{}.binary", materials[1].name))).unwrap();
+        assert!(write_dir(&blocked, 3, dims, 7).is_err());
+        assert_eq!(std::fs::read_dir(&blocked).unwrap().count(), 1);
     }
 }

@@ -221,6 +221,8 @@ static void check_facts(void) {
 
     CHECK(strcmp(brdf_atlas_version(), need("version", 0)) == 0, "version %s",
           brdf_atlas_version());
+    CHECK(strcmp(brdf_atlas_version(), BRDF_ATLAS_VERSION) == 0, "header version %s, library %s",
+          BRDF_ATLAS_VERSION, brdf_atlas_version());
     EXPECT(brdf_atlas_model_latent_dim(model, &q), OK, "");
     CHECK(q == (size_t)atoi(need("q", 0)), "q = %zu", q);
     EXPECT(brdf_atlas_model_material_count(model, &n), OK, "");
