@@ -177,29 +177,69 @@ impl MerlFile {
     }
 }
 
+/// What a file whose header is not a MERL header looks like, if its first
+/// bytes say so: a known signature, or text (printable UTF-8 with only
+/// tabs, line and page breaks among the control characters). A MERL header
+/// never looks like text: printable bytes make dims above 500 million.
+pub fn looks_like(bytes: &[u8]) -> Option<&'static str> {
+    const SIGNATURES: [(&[u8], &str); 6] = [
+        (b"\x89PNG\r\n\x1a\n", "a PNG image"),
+        (b"\x76\x2f\x31\x01", "an OpenEXR image"),
+        (b"\xff\xd8\xff", "a JPEG image"),
+        (b"\x1f\x8b", "a gzip-compressed file"),
+        (b"PK\x03\x04", "a zip archive"),
+        (b"\x7fELF", "a program"),
+    ];
+    if let Some((_, what)) = SIGNATURES.iter().find(|(sig, _)| bytes.starts_with(sig)) {
+        return Some(what);
+    }
+    let head = &bytes[..bytes.len().min(1024)];
+    let text = match std::str::from_utf8(head) {
+        Ok(t) => t,
+        // Cut inside a character at the end of the sample: still text.
+        Err(e) if e.error_len().is_none() => std::str::from_utf8(&head[..e.valid_up_to()]).ok()?,
+        Err(_) => return None,
+    };
+    let printable = |c: char| !c.is_control() || matches!(c, '\t' | '\n' | '\r' | '\x0c');
+    (!text.is_empty() && text.chars().all(printable)).then_some("text")
+}
+
 fn check_header(path: &Path, bytes: &[u8], len: u64) -> Result<Dims> {
     if is_lfs_pointer(bytes) {
         return Err(MerlError::LfsPointer {
             path: path.to_path_buf(),
         });
     }
+    // Something else altogether (text, an image): say so first.
+    let named = |e: MerlError| match looks_like(bytes) {
+        Some(looks_like) => MerlError::NotMerl {
+            path: path.to_path_buf(),
+            looks_like,
+            detail: e
+                .to_string()
+                .strip_prefix(&format!("{}: ", path.display()))
+                .unwrap_or_default()
+                .to_string(),
+        },
+        None => e,
+    };
     if len < HEADER_BYTES as u64 {
-        return Err(MerlError::TooShort {
+        return Err(named(MerlError::TooShort {
             path: path.to_path_buf(),
             len,
-        });
+        }));
     }
     let dim = |k: usize| i32::from_le_bytes(bytes[4 * k..4 * k + 4].try_into().expect("4 bytes"));
     let (a, b, c) = (dim(0), dim(1), dim(2));
     let max = MAX_DIM as i32;
     if !(1..=max).contains(&a) || !(1..=max).contains(&b) || !(1..=max).contains(&c) {
-        return Err(MerlError::BadDims {
+        return Err(named(MerlError::BadDims {
             path: path.to_path_buf(),
             a,
             b,
             c,
             max,
-        });
+        }));
     }
     let dims = Dims {
         theta_h: a as usize,
@@ -536,6 +576,18 @@ mod tests {
             (
                 write_bytes(d, "zero.binary", &header(0, 90, 180)),
                 "expected three positive dims",
+            ),
+            (
+                write_bytes(d, "notes.binary", b"some notes\nabout materials\n"),
+                "notes.binary: not a MERL file (it looks like text)",
+            ),
+            (
+                write_bytes(d, "short.binary", "\u{e9}t\u{e9}\n".as_bytes()),
+                "not a MERL file (it looks like text)",
+            ),
+            (
+                write_bytes(d, "pic.binary", b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR"),
+                "not a MERL file (it looks like a PNG image)",
             ),
             (
                 write_bytes(d, "hdr-only.binary", &header(90, 90, 180)),
