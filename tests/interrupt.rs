@@ -239,3 +239,26 @@ fn map_interrupted_changes_nothing() {
         assert_eq!(listing(out.path()), before, "{what}");
     }
 }
+
+#[test]
+fn report_interrupted_keeps_the_old_report_whole() {
+    let tmp = tempfile::tempdir().unwrap();
+    let m = tmp.path().join("m");
+    let m_arg = m.to_str().unwrap();
+    run(&["synth", "--count", "6", "--dims", "12,12,24", m_arg]);
+    let rep = tmp.path().join("rep");
+    let args = ["report", m_arg, "-o", rep.to_str().unwrap(), "--quick"];
+    run(&args);
+    let (top, inside) = (listing(tmp.path()), listing(&rep));
+    for delay in [50, 300, 800].map(Duration::from_millis) {
+        let (code, stderr) = interrupt(spawn(&args), delay, libc::SIGINT);
+        let what = format!("report after {delay:?}");
+        check_interrupted(&what, code, &stderr, 130, tmp.path(), &top, &top);
+        // The report has timings, so a finished one differs in content.
+        if code == Some(0) || !stderr.contains("nothing was changed") {
+            assert_eq!(names(&listing(&rep)), names(&inside), "{what}");
+        } else {
+            assert_eq!(listing(&rep), inside, "{what}");
+        }
+    }
+}
