@@ -177,33 +177,6 @@ impl MerlFile {
     }
 }
 
-/// What a file whose header is not a MERL header looks like, if its first
-/// bytes say so: a known signature, or text (printable UTF-8 with only
-/// tabs, line and page breaks among the control characters). A MERL header
-/// never looks like text: printable bytes make dims above 500 million.
-pub fn looks_like(bytes: &[u8]) -> Option<&'static str> {
-    const SIGNATURES: [(&[u8], &str); 6] = [
-        (b"\x89PNG\r\n\x1a\n", "a PNG image"),
-        (b"\x76\x2f\x31\x01", "an OpenEXR image"),
-        (b"\xff\xd8\xff", "a JPEG image"),
-        (b"\x1f\x8b", "a gzip-compressed file"),
-        (b"PK\x03\x04", "a zip archive"),
-        (b"\x7fELF", "a program"),
-    ];
-    if let Some((_, what)) = SIGNATURES.iter().find(|(sig, _)| bytes.starts_with(sig)) {
-        return Some(what);
-    }
-    let head = &bytes[..bytes.len().min(1024)];
-    let text = match std::str::from_utf8(head) {
-        Ok(t) => t,
-        // Cut inside a character at the end of the sample: still text.
-        Err(e) if e.error_len().is_none() => std::str::from_utf8(&head[..e.valid_up_to()]).ok()?,
-        Err(_) => return None,
-    };
-    let printable = |c: char| !c.is_control() || matches!(c, '\t' | '\n' | '\r' | '\x0c');
-    (!text.is_empty() && text.chars().all(printable)).then_some("text")
-}
-
 fn check_header(path: &Path, bytes: &[u8], len: u64) -> Result<Dims> {
     if is_lfs_pointer(bytes) {
         return Err(MerlError::LfsPointer {
@@ -211,7 +184,7 @@ fn check_header(path: &Path, bytes: &[u8], len: u64) -> Result<Dims> {
         });
     }
     // Something else altogether (text, an image): say so first.
-    let named = |e: MerlError| match looks_like(bytes) {
+    let named = |e: MerlError| match crate::sniff::looks_like(bytes) {
         Some(looks_like) => MerlError::NotMerl {
             path: path.to_path_buf(),
             looks_like,
