@@ -243,6 +243,7 @@ mod tests {
     }
 
     #[test]
+    #[cfg(unix)]
     fn sweep_removes_what_dead_processes_left_and_nothing_else() {
         let dir = tempfile::tempdir().unwrap();
         // A pid above the kernel's limit never exists.
