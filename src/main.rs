@@ -4,12 +4,15 @@
 //! arguments (`Args`, derived with clap) and its `run`; `main` parses the
 //! command line, runs one command and turns any error into one line on
 //! stderr and exit status 1 (clap's own usage errors exit with status 2).
+//! An interrupt (Ctrl-C, `kill`) leaves the outputs as they were, prints one
+//! line and exits with 128 + the signal (130 for Ctrl-C): see `interrupt`.
 #![warn(missing_docs)]
 
 mod args;
 mod cmd;
 mod error;
 mod format;
+mod interrupt;
 mod machine;
 mod progress;
 
@@ -91,6 +94,8 @@ fn run(command: &Command) -> Result<ExitCode, Error> {
 static HEAP: brdf_atlas_core::heap::Counting = brdf_atlas_core::heap::Counting;
 
 fn main() -> ExitCode {
+    // First, while this is the only thread: the mask is inherited.
+    interrupt::install();
     let cli = Cli::parse();
     match run(&cli.command) {
         Ok(code) => code,

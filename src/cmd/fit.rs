@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use brdf_atlas_core::limits::MAX_Q;
+use brdf_atlas_core::{Dataset, GplvmParams, Store};
 use brdf_atlas_core::{FitOptions, FitReport, fit_dir, store_path_for};
-use brdf_atlas_core::{GplvmParams, Store};
 
 use crate::args::{OptimizerArg, PrecisionArg, TransformArg};
 use crate::error::Error;
@@ -80,7 +80,8 @@ pub struct Fitted {
 /// Fit and write the model; nothing is printed but progress bars.
 ///
 /// Parameters are checked before any file is read, and `q` against the
-/// number of `.binary` files before the long store pass. A fit that fails
+/// number of `.binary` files before the long store pass (when there are too
+/// few, an invalid one among them is named first). A fit that fails
 /// after writing a new store removes it again, so a failed run leaves no
 /// store without a model.
 pub fn fit(args: &Args) -> Result<Fitted, Error> {
@@ -92,6 +93,10 @@ pub fn fit(args: &Args) -> Result<Fitted, Error> {
         .check()?;
     let n = count_binaries(&args.dir).unwrap_or(0);
     if n > 0 && args.q >= n {
+        // An invalid file is the first thing to fix (and the likelier
+        // mistake): name it rather than the count. At most 16 files (q's
+        // bound), so checking them all now is quick.
+        Dataset::open_dir(&args.dir)?;
         return Err(Error::Input(format!(
             "{}: --q {} needs more materials than latent dimensions, found {n} .binary file{}",
             args.dir.display(),

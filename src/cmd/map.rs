@@ -3,7 +3,7 @@
 //! JSON sidecar describing the pixel <-> latent mapping.
 
 use std::io::{self, Write};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -35,10 +35,10 @@ pub struct Args {
     /// Model file written by `fit` (q = 2).
     #[arg(value_name = "MODEL")]
     pub model: PathBuf,
-    /// PNG to write.
+    /// PNG to write (the path ends in .png).
     #[arg(short = 'o', long = "output", value_name = "PNG")]
     pub png: PathBuf,
-    /// Also write the linear albedo as a float OpenEXR.
+    /// Also write the linear albedo as a float OpenEXR (the path ends in .exr).
     #[arg(long, value_name = "EXR")]
     pub exr: Option<PathBuf>,
     /// JSON sidecar to write [default: the PNG path with .json].
@@ -91,8 +91,33 @@ pub fn samples_for(model: &Model, asked: Option<usize>) -> Option<usize> {
     })
 }
 
+/// Does `path` end in `.ext` (any case)?
+fn has_extension(path: &Path, ext: &str) -> bool {
+    path.extension()
+        .is_some_and(|e| e.to_string_lossy().eq_ignore_ascii_case(ext))
+}
+
+/// The formats follow from the options, so each path must end as its
+/// format does: `-o x.jpg` would otherwise be PNG bytes under a JPEG name.
+fn check_extensions(args: &Args) -> Result<(), Error> {
+    if !has_extension(&args.png, "png") {
+        return Err(Error::Input(format!(
+            "{}: map writes a PNG image, the output must end in .png (a float OpenEXR goes to --exr FILE.exr)",
+            args.png.display()
+        )));
+    }
+    if let Some(exr) = args.exr.as_ref().filter(|p| !has_extension(p, "exr")) {
+        return Err(Error::Input(format!(
+            "{}: --exr writes an OpenEXR image, the path must end in .exr",
+            exr.display()
+        )));
+    }
+    Ok(())
+}
+
 /// Compute the map and write every output; report what was done.
 pub fn draw(model: &Model, args: &Args, report: &mut impl Write) -> Result<(), Error> {
+    check_extensions(args)?;
     if model.q() != 2 {
         return Err(Error::Input(format!(
             "{}: a map needs a 2-D latent space, this model has q = {} (fit with --q 2)",
@@ -170,6 +195,8 @@ pub fn draw(model: &Model, args: &Args, report: &mut impl Write) -> Result<(), E
 
 /// Run `map`.
 pub fn run(args: &Args) -> Result<ExitCode, Error> {
+    // Before the model is read: a misnamed output is quick to tell.
+    check_extensions(args)?;
     let model = Model::open(&args.model)?;
     draw(&model, args, &mut io::stdout().lock())?;
     Ok(ExitCode::SUCCESS)
@@ -178,7 +205,6 @@ pub fn run(args: &Args) -> Result<ExitCode, Error> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::path::Path;
 
     /// The default PNG sidecar next to `png`.
     fn default_json(png: &Path) -> PathBuf {

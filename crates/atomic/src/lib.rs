@@ -1,26 +1,53 @@
 //! Atomic file output for brdf-atlas: write a temporary file beside the target, sync it,
 //! then rename it over the target. A failed or interrupted write leaves the
 //! old file (if any) untouched and no partial file behind.
+//!
+//! # Nothing left behind
+//!
+//! Temporaries are named files (`.{name}.tmp-{pid}-{n}`, beside the target)
+//! that a process-wide list keeps track of ([`temp_path_for`]), with two ways
+//! out besides their own commit or drop:
+//!
+//! - an interrupt the program can catch (SIGINT, SIGTERM): the program waits
+//!   for the signal on an ordinary thread and calls [`remove_temporaries`],
+//!   which waits for any output being put in place ([`critical`]: the renames
+//!   of one commit happen whole or not at all), removes every temporary and
+//!   stops all further commits, so the program exits with the old outputs
+//!   untouched, or the complete new ones if it had finished;
+//! - a kill nobody can catch (SIGKILL, a crash, a power loss): the next run
+//!   that writes into the same directory removes the temporaries of
+//!   processes that no longer exist ([`sweep`]).
+//!
+//! Why not unnamed files (`O_TMPFILE`, linked in by `linkat` on commit)?
+//! They would vanish with the process by themselves, but only files can be
+//! unnamed and only on some file systems: a report is a directory built
+//! under a temporary name, a fit's store goes in by an exchange
+//! (`renameat2(RENAME_EXCHANGE)`, see [`swap_in`]) which needs both files
+//! named and leaves the old one under the temporary name until the model is
+//! in place, and a store on a file system without `O_TMPFILE` still needs
+//! a name. Each of these still needs the list and the sweep, so names
+//! everywhere, with one mechanism, is simpler and covers every case.
+//!
+//! ```
+//! let dir = tempfile::tempdir()?;
+//! let path = dir.path().join("out.txt");
+//! brdf_atomic::write_atomic(&path, |w| std::io::Write::write_all(w, b"done"))?;
+//! assert_eq!(std::fs::read(&path)?, b"done");
+//! // Only the output: no temporary beside it.
+//! assert_eq!(std::fs::read_dir(dir.path())?.count(), 1);
+//! # Ok::<(), std::io::Error>(())
+//! ```
 
 #![warn(missing_docs)]
+
+mod cleanup;
 
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 
-static COUNTER: AtomicU64 = AtomicU64::new(0);
-
-/// A temporary path in the same directory as `path` (so the final rename
-/// never crosses file systems), unique within this process.
-pub fn temp_path_for(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    path.with_file_name(format!(".{name}.tmp-{}-{n}", std::process::id()))
-}
+pub use cleanup::{committed, critical, remove_temporaries, sweep, temp_path_for};
+use cleanup::{create_temp, forget, mark_committed};
 
 /// Write `path` atomically: `fill` writes the whole content into a buffered
 /// temporary file, which is then synced and renamed over `path`.
@@ -28,19 +55,24 @@ pub fn write_atomic<F>(path: &Path, fill: F) -> io::Result<()>
 where
     F: FnOnce(&mut BufWriter<File>) -> io::Result<()>,
 {
-    let tmp = temp_path_for(path);
+    let (tmp, file) = create_temp(path, |p| File::create(p))?;
     let result = (|| {
-        let mut w = BufWriter::with_capacity(1 << 20, File::create(&tmp)?);
+        let mut w = BufWriter::with_capacity(1 << 20, file);
         fill(&mut w)?;
         w.flush()?;
         let file = w.into_inner().map_err(|e| e.into_error())?;
         file.sync_all()?;
         drop(file);
-        std::fs::rename(&tmp, path)
+        critical(|| {
+            std::fs::rename(&tmp, path)?;
+            mark_committed(path);
+            Ok(())
+        })
     })();
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
+    forget(&tmp);
     result
 }
 
@@ -75,11 +107,13 @@ pub fn commit_all(files: Vec<PendingFile>) -> Result<(), (PathBuf, io::Error)> {
             ));
         }
     }
-    for f in files {
-        let target = f.target.clone();
-        f.commit(false).map_err(|e| (target, e))?;
-    }
-    Ok(())
+    critical(|| {
+        for f in files {
+            let target = f.target.clone();
+            f.commit(false).map_err(|e| (target, e))?;
+        }
+        Ok(())
+    })
 }
 
 /// How [`swap_in`] put a file in place.
@@ -105,6 +139,12 @@ pub enum Swapped {
 /// caller decides when the old file goes. Falls back to a rename where the
 /// system or file system cannot exchange.
 pub fn swap_in(from: &Path, to: &Path) -> io::Result<Swapped> {
+    let swapped = critical(|| exchange(from, to))?;
+    mark_committed(to);
+    Ok(swapped)
+}
+
+fn exchange(from: &Path, to: &Path) -> io::Result<Swapped> {
     if std::fs::symlink_metadata(to).is_err() {
         std::fs::rename(from, to)?;
         return Ok(Swapped::Renamed);
@@ -172,12 +212,13 @@ pub struct PendingFile {
 impl PendingFile {
     /// Create the temporary file for `target`.
     pub fn create(target: &Path) -> io::Result<PendingFile> {
-        let tmp = temp_path_for(target);
-        let file = File::options()
-            .read(true)
-            .write(true)
-            .create_new(true)
-            .open(&tmp)?;
+        let (tmp, file) = create_temp(target, |tmp| {
+            File::options()
+                .read(true)
+                .write(true)
+                .create_new(true)
+                .open(tmp)
+        })?;
         Ok(PendingFile {
             tmp,
             target: target.to_path_buf(),
@@ -230,7 +271,9 @@ impl PendingFile {
             file.sync_all()?;
         }
         drop(file);
-        std::fs::rename(&self.tmp, &self.target)?;
+        critical(|| std::fs::rename(&self.tmp, &self.target))?;
+        mark_committed(&self.target);
+        forget(&self.tmp);
         self.tmp = PathBuf::new();
         Ok(())
     }
@@ -241,6 +284,7 @@ impl Drop for PendingFile {
         if !self.tmp.as_os_str().is_empty() {
             self.file.take();
             let _ = std::fs::remove_file(&self.tmp);
+            forget(&self.tmp);
         }
     }
 }
@@ -258,8 +302,10 @@ pub struct StagedDir {
 impl StagedDir {
     /// Create the temporary directory for `target` (and any missing parent).
     pub fn create(target: &Path) -> io::Result<StagedDir> {
-        let dir = temp_path_for(target);
-        std::fs::create_dir_all(&dir)?;
+        if let Some(parent) = target.parent().filter(|p| !p.as_os_str().is_empty()) {
+            std::fs::create_dir_all(parent)?;
+        }
+        let (dir, ()) = create_temp(target, |p| std::fs::create_dir(p))?;
         Ok(StagedDir {
             dir,
             target: target.to_path_buf(),
@@ -277,27 +323,47 @@ impl StagedDir {
         &self.target
     }
 
-    /// Put the directory in place, replacing whatever is at the target: the
-    /// old one is moved aside first (and moved back if the new one cannot
-    /// take its place), then removed. The error names the path that failed.
+    /// Put the directory in place, replacing whatever is at the target: by
+    /// an exchange where the file system can (the old one then leaves under
+    /// the temporary name and is removed), else the old one is moved aside
+    /// first (and moved back if the new one cannot take its place), then
+    /// removed. The error names the path that failed.
     pub fn commit(mut self) -> Result<(), (PathBuf, io::Error)> {
-        let old = temp_path_for(&self.target);
-        let had_old = std::fs::symlink_metadata(&self.target).is_ok();
-        if had_old {
+        critical(|| {
+            match swap_in(&self.dir, &self.target) {
+                Ok(Swapped::Exchanged) => {
+                    self.committed = true;
+                    // The old directory, now under the temporary name.
+                    let old = self.dir.clone();
+                    std::fs::remove_dir_all(&old).map_err(|e| (old.clone(), e))?;
+                    forget(&old);
+                    return Ok(());
+                }
+                Ok(_) => {
+                    self.committed = true;
+                    forget(&self.dir);
+                    return Ok(());
+                }
+                // Cannot exchange, and a directory cannot be renamed over a
+                // non-empty one: move the old one aside below.
+                Err(_) if std::fs::symlink_metadata(&self.target).is_ok() => {}
+                Err(e) => return Err((self.target.clone(), e)),
+            }
+            let old = temp_path_for(&self.target);
             std::fs::rename(&self.target, &old).map_err(|e| (self.target.clone(), e))?;
-        }
-        if let Err(e) = std::fs::rename(&self.dir, &self.target) {
-            if had_old {
+            if let Err(e) = std::fs::rename(&self.dir, &self.target) {
                 // Best effort: the error below is what matters.
                 let _ = std::fs::rename(&old, &self.target);
+                forget(&old);
+                return Err((self.target.clone(), e));
             }
-            return Err((self.target.clone(), e));
-        }
-        self.committed = true;
-        if had_old {
-            std::fs::remove_dir_all(&old).map_err(|e| (old, e))?;
-        }
-        Ok(())
+            self.committed = true;
+            mark_committed(&self.target);
+            forget(&self.dir);
+            std::fs::remove_dir_all(&old).map_err(|e| (old.clone(), e))?;
+            forget(&old);
+            Ok(())
+        })
     }
 }
 
@@ -305,6 +371,7 @@ impl Drop for StagedDir {
     fn drop(&mut self) {
         if !self.committed {
             let _ = std::fs::remove_dir_all(&self.dir);
+            forget(&self.dir);
         }
     }
 }

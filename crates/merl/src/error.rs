@@ -23,6 +23,19 @@ pub enum MerlError {
         /// The file.
         path: PathBuf,
     },
+    /// The file is something else: text, an image, an archive. Said first
+    /// when a header's dims are absurd (or missing) and the first bytes
+    /// look like that thing; what the header check found follows.
+    #[error("{}: not a MERL file (it looks like {looks_like}); {detail}", path.display())]
+    NotMerl {
+        /// The file.
+        path: PathBuf,
+        /// What it looks like: "text", "a PNG image", ...
+        looks_like: &'static str,
+        /// What the header check found, without the path: "header says
+        /// AxBxC, expected ...", "N bytes is too short ...".
+        detail: String,
+    },
     /// The file is too short to hold even the 12-byte header.
     #[error("{}: {len} bytes is too short for a MERL file (needs a 12-byte header of three int32 dims)", path.display())]
     TooShort {

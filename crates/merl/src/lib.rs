@@ -18,6 +18,7 @@
 pub mod albedo;
 pub mod angles;
 pub mod error;
+pub mod sniff;
 pub mod synth;
 pub mod table;
 

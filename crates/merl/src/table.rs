@@ -183,23 +183,36 @@ fn check_header(path: &Path, bytes: &[u8], len: u64) -> Result<Dims> {
             path: path.to_path_buf(),
         });
     }
+    // Something else altogether (text, an image): say so first.
+    let named = |e: MerlError| match crate::sniff::looks_like(bytes) {
+        Some(looks_like) => MerlError::NotMerl {
+            path: path.to_path_buf(),
+            looks_like,
+            detail: e
+                .to_string()
+                .strip_prefix(&format!("{}: ", path.display()))
+                .unwrap_or_default()
+                .to_string(),
+        },
+        None => e,
+    };
     if len < HEADER_BYTES as u64 {
-        return Err(MerlError::TooShort {
+        return Err(named(MerlError::TooShort {
             path: path.to_path_buf(),
             len,
-        });
+        }));
     }
     let dim = |k: usize| i32::from_le_bytes(bytes[4 * k..4 * k + 4].try_into().expect("4 bytes"));
     let (a, b, c) = (dim(0), dim(1), dim(2));
     let max = MAX_DIM as i32;
     if !(1..=max).contains(&a) || !(1..=max).contains(&b) || !(1..=max).contains(&c) {
-        return Err(MerlError::BadDims {
+        return Err(named(MerlError::BadDims {
             path: path.to_path_buf(),
             a,
             b,
             c,
             max,
-        });
+        }));
     }
     let dims = Dims {
         theta_h: a as usize,
@@ -536,6 +549,18 @@ mod tests {
             (
                 write_bytes(d, "zero.binary", &header(0, 90, 180)),
                 "expected three positive dims",
+            ),
+            (
+                write_bytes(d, "notes.binary", b"some notes\nabout materials\n"),
+                "notes.binary: not a MERL file (it looks like text)",
+            ),
+            (
+                write_bytes(d, "short.binary", "\u{e9}t\u{e9}\n".as_bytes()),
+                "not a MERL file (it looks like text)",
+            ),
+            (
+                write_bytes(d, "pic.binary", b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR"),
+                "not a MERL file (it looks like a PNG image)",
             ),
             (
                 write_bytes(d, "hdr-only.binary", &header(90, 90, 180)),

@@ -148,16 +148,20 @@ fn fit_staged(
         ));
     }
     // The store goes in by an exchange, so the old one (if any) is still at
-    // hand until the model, the commit point, is in place.
-    let swapped = swap_in(staging, store_path).map_err(|e| CoreError::write(store_path, e))?;
-    if let Err(e) = staged.commit(false) {
-        if swapped == Swapped::Exchanged {
-            // Undo: the old store back beside the old model. Best effort; the
-            // commit's error is the one to report.
-            let _ = swap_in(staging, store_path);
+    // hand until the model, the commit point, is in place. An interrupt
+    // waits for the pair (`critical`), so it never sees one without the other.
+    let swapped = brdf_atomic::critical(|| {
+        let swapped = swap_in(staging, store_path).map_err(|e| CoreError::write(store_path, e))?;
+        if let Err(e) = staged.commit(false) {
+            if swapped == Swapped::Exchanged {
+                // Undo: the old store back beside the old model. Best effort; the
+                // commit's error is the one to report.
+                let _ = swap_in(staging, store_path);
+            }
+            return Err(CoreError::write(model, e));
         }
-        return Err(CoreError::write(model, e));
-    }
+        Ok(swapped)
+    })?;
     if swapped == Swapped::Exchanged {
         // The old store. Freeing its cached pages is most of the time a
         // re-fit spends saving; failing to remove it

@@ -1,0 +1,264 @@
+//! Interrupted runs leave nothing behind: the real binary is stopped by
+//! SIGINT, SIGTERM or SIGKILL at several moments (the store pass, the
+//! search, the save, the commit, or after it finished: all are valid), and
+//! the output directory, hidden files included, must be exactly as before
+//! (or exactly the complete new output). After a SIGKILL it is so once the
+//! next run into that directory has finished.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::OnceLock;
+use std::time::Duration;
+
+const BIN: &str = env!("CARGO_BIN_EXE_brdf-atlas");
+
+/// Materials enough that a fit lasts about half a second, split between
+/// the store pass and the search (which grows with the count cubed).
+const SYNTH: [&str; 5] = ["synth", "--count", "60", "--dims", "32,32,64"];
+
+fn run(args: &[&str]) {
+    let out = Command::new(BIN).args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// One materials directory for every test (read only).
+fn materials() -> &'static Path {
+    static DIR: OnceLock<(tempfile::TempDir, PathBuf)> = OnceLock::new();
+    &DIR.get_or_init(|| {
+        let dir = tempfile::tempdir().unwrap();
+        let m = dir.path().join("m");
+        run(&[&SYNTH[..], &[m.to_str().unwrap()]].concat());
+        (dir, m)
+    })
+    .1
+}
+
+/// Every name in `dir` (hidden ones too) with its content's length and hash.
+fn listing(dir: &Path) -> BTreeMap<String, (u64, u64)> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| {
+            let e = e.unwrap();
+            let bytes = if e.file_type().unwrap().is_file() {
+                std::fs::read(e.path()).unwrap()
+            } else {
+                Vec::new()
+            };
+            let hash = bytes.iter().fold(0xcbf29ce484222325u64, |h, &b| {
+                (h ^ u64::from(b)).wrapping_mul(0x100000001b3)
+            });
+            (
+                e.file_name().to_string_lossy().into_owned(),
+                (bytes.len() as u64, hash),
+            )
+        })
+        .collect()
+}
+
+fn names(l: &BTreeMap<String, (u64, u64)>) -> Vec<&String> {
+    l.keys().collect()
+}
+
+fn spawn(args: &[&str]) -> Child {
+    Command::new(BIN)
+        .args(args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+/// Send `signal` after `delay`; the exit code (None if killed) and stderr.
+fn interrupt(child: Child, delay: Duration, signal: libc::c_int) -> (Option<i32>, String) {
+    std::thread::sleep(delay);
+    let pid = libc::pid_t::try_from(child.id()).unwrap();
+    // SAFETY: our own child, not yet waited for, so the pid is still its.
+    unsafe { libc::kill(pid, signal) };
+    let out = child.wait_with_output().unwrap();
+    eprintln!("signal {signal} after {delay:?}: {:?}", out.status);
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// After an interrupt: either it finished first (exit 0, complete output)
+/// or it was stopped with one line and the listing is exactly `before`.
+fn check_interrupted(
+    what: &str,
+    code: Option<i32>,
+    stderr: &str,
+    expected_code: i32,
+    dir: &Path,
+    before: &BTreeMap<String, (u64, u64)>,
+    complete: &BTreeMap<String, (u64, u64)>,
+) {
+    let after = listing(dir);
+    match code {
+        Some(0) => assert_eq!(names(&after), names(complete), "{what}: finished"),
+        Some(c) if c == expected_code => {
+            let lines: Vec<&str> = stderr.lines().collect();
+            assert_eq!(lines.len(), 1, "{what}: one line on stderr: {stderr:?}");
+            if lines[0] == "interrupted; nothing was changed" {
+                assert_eq!(&after, before, "{what}: nothing was changed");
+            } else {
+                // Stopped after the outputs were in place.
+                assert!(lines[0].starts_with("interrupted; "), "{what}: {stderr:?}");
+                assert_eq!(names(&after), names(complete), "{what}: complete");
+            }
+        }
+        other => panic!("{what}: exit {other:?}, stderr {stderr:?}"),
+    }
+}
+
+fn delays() -> impl Iterator<Item = Duration> {
+    [20, 100, 200, 300, 420]
+        .into_iter()
+        .map(Duration::from_millis)
+}
+
+fn fit_args<'a>(m: &'a Path, model: &'a Path) -> [&'a str; 4] {
+    ["fit", m.to_str().unwrap(), "-o", model.to_str().unwrap()]
+}
+
+#[test]
+fn fit_interrupted_by_sigint_or_sigterm_changes_nothing() {
+    let m = materials();
+    let out = tempfile::tempdir().unwrap();
+    let model = out.path().join("a.model");
+    run(&fit_args(m, &model));
+    let before = listing(out.path());
+    assert_eq!(names(&before), ["a.model", "a.model.store"]);
+    for (i, delay) in delays().enumerate() {
+        let (signal, code) = if i % 2 == 0 {
+            (libc::SIGINT, 130)
+        } else {
+            (libc::SIGTERM, 143)
+        };
+        let (got, stderr) = interrupt(spawn(&fit_args(m, &model)), delay, signal);
+        let what = format!("fit, signal {signal} after {delay:?}");
+        check_interrupted(&what, got, &stderr, code, out.path(), &before, &before);
+        // The fit is deterministic: a finished re-fit writes the same bytes.
+        assert_eq!(listing(out.path()), before, "{what}");
+    }
+}
+
+#[test]
+fn fit_killed_leaves_nothing_once_the_next_run_is_done() {
+    let m = materials();
+    let out = tempfile::tempdir().unwrap();
+    let model = out.path().join("a.model");
+    run(&fit_args(m, &model));
+    let before = listing(out.path());
+    // What killed runs left, whatever the moments below hit: a temporary
+    // store of a process that is gone (no pid reaches 2^31 - 1000) and a
+    // report's temporary directory. A user's file that only looks alike stays.
+    let dead = out.path().join(".a.model.store.tmp-2147482647-0");
+    std::fs::write(&dead, b"partial").unwrap();
+    let dead_dir = out.path().join(".report.tmp-2147482647-1");
+    std::fs::create_dir(&dead_dir).unwrap();
+    std::fs::write(dead_dir.join("index.html"), b"partial").unwrap();
+    let user = out.path().join(".a.model.tmp-mine");
+    std::fs::write(&user, b"keep").unwrap();
+    run(&fit_args(m, &model));
+    assert!(!dead.exists() && !dead_dir.exists() && user.exists());
+    std::fs::remove_file(&user).unwrap();
+    assert_eq!(listing(out.path()), before);
+    for delay in delays() {
+        let (code, _) = interrupt(spawn(&fit_args(m, &model)), delay, libc::SIGKILL);
+        assert!(matches!(code, None | Some(0)), "{delay:?}: {code:?}");
+        // What was there stays usable: the old pair or the new one.
+        let after = listing(out.path());
+        assert!(after.contains_key("a.model") && after.contains_key("a.model.store"));
+        run(&fit_args(m, &model));
+        assert_eq!(listing(out.path()), before, "killed after {delay:?}");
+    }
+}
+
+#[test]
+fn synth_interrupted_writes_all_files_or_none() {
+    let out = tempfile::tempdir().unwrap();
+    let dir = out.path().join("m");
+    let dir_arg = dir.to_str().unwrap();
+    let complete = listing(materials());
+    std::fs::create_dir(&dir).unwrap();
+    let empty = listing(&dir);
+    for delay in [20, 150, 300].map(Duration::from_millis) {
+        let (code, stderr) = interrupt(
+            spawn(&[&SYNTH[..], &[dir_arg]].concat()),
+            delay,
+            libc::SIGINT,
+        );
+        let what = format!("synth after {delay:?}");
+        check_interrupted(&what, code, &stderr, 130, &dir, &empty, &complete);
+        if code == Some(0) {
+            assert_eq!(listing(&dir), complete, "{what}");
+            return;
+        }
+    }
+}
+
+#[test]
+fn synth_killed_leaves_nothing_once_the_next_run_is_done() {
+    let out = tempfile::tempdir().unwrap();
+    let dir: PathBuf = out.path().join("m");
+    let dir_arg = dir.to_str().unwrap();
+    let args = [&SYNTH[..], &[dir_arg]].concat();
+    let (code, _) = interrupt(spawn(&args), Duration::from_millis(300), libc::SIGKILL);
+    assert!(matches!(code, None | Some(0)), "{code:?}");
+    run(&args);
+    assert_eq!(listing(&dir), listing(materials()));
+}
+
+#[test]
+fn map_interrupted_changes_nothing() {
+    let m = materials();
+    let out = tempfile::tempdir().unwrap();
+    let model = out.path().join("a.model");
+    run(&fit_args(m, &model));
+    let png = out.path().join("map.png");
+    let args = [
+        "map",
+        model.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+        "--size",
+        "256",
+    ];
+    run(&args);
+    let before = listing(out.path());
+    for delay in [50, 300].map(Duration::from_millis) {
+        let (code, stderr) = interrupt(spawn(&args), delay, libc::SIGINT);
+        let what = format!("map after {delay:?}");
+        check_interrupted(&what, code, &stderr, 130, out.path(), &before, &before);
+        assert_eq!(listing(out.path()), before, "{what}");
+    }
+}
+
+#[test]
+fn report_interrupted_keeps_the_old_report_whole() {
+    let tmp = tempfile::tempdir().unwrap();
+    let m = tmp.path().join("m");
+    let m_arg = m.to_str().unwrap();
+    run(&["synth", "--count", "6", "--dims", "12,12,24", m_arg]);
+    let rep = tmp.path().join("rep");
+    let args = ["report", m_arg, "-o", rep.to_str().unwrap(), "--quick"];
+    run(&args);
+    let (top, inside) = (listing(tmp.path()), listing(&rep));
+    for delay in [50, 400].map(Duration::from_millis) {
+        let (code, stderr) = interrupt(spawn(&args), delay, libc::SIGINT);
+        let what = format!("report after {delay:?}");
+        check_interrupted(&what, code, &stderr, 130, tmp.path(), &top, &top);
+        // The report has timings, so a finished one differs in content.
+        if code == Some(0) || !stderr.contains("nothing was changed") {
+            assert_eq!(names(&listing(&rep)), names(&inside), "{what}");
+        } else {
+            assert_eq!(listing(&rep), inside, "{what}");
+        }
+    }
+}
