@@ -9,7 +9,6 @@
 //! output is put in place and no temporary is created.
 
 use std::cell::Cell;
-use std::collections::HashSet;
 use std::io;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -20,7 +19,7 @@ static COMMITTED: AtomicBool = AtomicBool::new(false);
 static COMMIT: Mutex<()> = Mutex::new(());
 static REGISTRY: Mutex<Registry> = Mutex::new(Registry {
     paths: Vec::new(),
-    swept: None,
+    swept: Vec::new(),
     closed: false,
 });
 
@@ -31,8 +30,10 @@ thread_local! {
 struct Registry {
     /// Temporary names handed out and not yet known to be gone.
     paths: Vec<PathBuf>,
-    /// Directories already swept by this process.
-    swept: Option<HashSet<PathBuf>>,
+    /// Directories already swept by this process: a few, so a list (whose
+    /// allocations a leak checker sees as reachable from the static, unlike
+    /// a hash table's, which point into the middle of their blocks).
+    swept: Vec<PathBuf>,
     /// Set by [`remove_temporaries`]: no new temporary after that.
     closed: bool,
 }
@@ -167,13 +168,10 @@ fn sweep_locked(reg: &mut Registry, path: &Path) {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    if !reg
-        .swept
-        .get_or_insert_with(HashSet::new)
-        .insert(dir.clone())
-    {
+    if reg.swept.contains(&dir) {
         return;
     }
+    reg.swept.push(dir.clone());
     let Ok(entries) = std::fs::read_dir(&dir) else {
         return;
     };
