@@ -88,7 +88,7 @@ impl HookeJeeves {
 
 impl Optimizer for HookeJeeves {
     fn name(&self) -> &'static str {
-        "hooke-jeeves"
+        super::OptimizerKind::HookeJeeves.name()
     }
 
     fn minimize(

@@ -57,7 +57,7 @@ fn pinned(x: f64, g: f64) -> bool {
 
 impl Optimizer for Lbfgs {
     fn name(&self) -> &'static str {
-        "lbfgs"
+        super::OptimizerKind::Lbfgs.name()
     }
 
     fn minimize(
