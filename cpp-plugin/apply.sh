@@ -10,7 +10,9 @@
 #   libbrdf_atlas_c.so (default: this workspace's target/release, or
 #   $CARGO_TARGET_DIR/release);
 # - inserts our own lines (each ends with "// brdf-atlas" or "# brdf-atlas")
-#   after named anchor lines of four upstream files. Nothing upstream is
+#   after named anchor lines of five upstream files (brdf.pro,
+#   BRDFMeasuredMERL.h, ParameterWindow.h, ParameterWindow.cpp,
+#   MainWindow.cpp; the list below). Nothing upstream is
 #   changed or removed. An anchor that is missing or not unique stops the
 #   script with a message and nothing is written (upstream moved: update the
 #   anchors here).
