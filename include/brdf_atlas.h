@@ -90,6 +90,19 @@
 #define BRDF_ATLAS_MAX_SAMPLES (1 << 24)
 
 /**
+ * The GPLVM's own weights `K^-1 k(x)` (the paper's reconstruction; what
+ * `brdf_atlas_model_reconstruct` uses).
+ */
+#define BRDF_ATLAS_BLEND_GP 0
+
+/**
+ * The GP's weights moved towards a kernel-weighted average of the materials
+ * just far enough that the clamp to >= 0 removes at most 0.05% of the
+ * cosine-weighted reflectance (one more pass over the store).
+ */
+#define BRDF_ATLAS_BLEND_PLAUSIBLE 1
+
+/**
  * What a call did. Every fallible function returns one; the numbers are
  * fixed and will not change. `brdf_atlas_status_message` names a status,
  * `brdf_atlas_last_error_message` gives the full message of the last failed
@@ -228,6 +241,47 @@ typedef struct BrdfAtlasDims {
      */
     size_t phi_d;
 } BrdfAtlasDims;
+
+/**
+ * What the model knows at a latent point and how physical its material is.
+ */
+typedef struct BrdfAtlasPlausibility {
+    /**
+     * Share (0..1) of the cosine-weighted reflectance that the clamp to
+     * >= 0 removes (values before the clamp, over measured bins).
+     */
+    double clamped_reflectance;
+    /**
+     * Share (0..1) of the measured values that are negative before the clamp.
+     */
+    double clamped_values;
+    /**
+     * Largest directional albedo of the material over channels and
+     * incidence angles (a physical material has at most 1).
+     */
+    double max_albedo;
+    /**
+     * Incidence of `max_albedo`, degrees from the normal.
+     */
+    double max_albedo_incidence;
+    /**
+     * The GP's predictive variance, 0 at an input material, 1 where the
+     * data say nothing.
+     */
+    double variance;
+    /**
+     * The sum of the blend weights (towards 0 far from the data).
+     */
+    double weight_sum;
+    /**
+     * 1 when `clamped_reflectance <= 0.01` and `max_albedo <= 1`, else 0.
+     */
+    int32_t plausible;
+    /**
+     * 1 when `variance > 0.5`: the model knows little here.
+     */
+    int32_t low_confidence;
+} BrdfAtlasPlausibility;
 
 /**
  * Where a MERL file lands in a model's latent plane.
@@ -446,6 +500,67 @@ enum BrdfAtlasStatus brdf_atlas_model_dims(const struct BrdfAtlasModel *model,
  * `model` is NULL or a live handle; `len` is NULL or valid for writing.
  */
 enum BrdfAtlasStatus brdf_atlas_model_table_len(const struct BrdfAtlasModel *model, size_t *len);
+
+/**
+ * Plausibility and confidence of the material at latent point (x, y) under
+ * blend rule `blend` (`BRDF_ATLAS_BLEND_GP` or `BRDF_ATLAS_BLEND_PLAUSIBLE`).
+ * Reads the whole store once (about as long as a reconstruction).
+ *
+ * Ownership: `model` is borrowed; `out` is caller-owned, written on success only.
+ *
+ * Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (x or y NaN or infinite, an
+ * unknown rule), UNSUPPORTED (the model is not 2-D).
+ *
+ * # Safety
+ * `model` is NULL or a live handle; `out` is NULL or valid for writing.
+ */
+enum BrdfAtlasStatus brdf_atlas_model_plausibility(const struct BrdfAtlasModel *model,
+                                                   double x,
+                                                   double y,
+                                                   int32_t blend,
+                                                   struct BrdfAtlasPlausibility *out);
+
+/**
+ * The GP's predictive variance at latent point (x, y) (0 at an input
+ * material, 1 where the data say nothing; above 0.5 the model knows
+ * little) and the sum of the blend weights. Costs as much as
+ * `brdf_atlas_model_weights`: no pass over the store.
+ *
+ * Ownership: `model` is borrowed; `variance` and `weight_sum` are
+ * caller-owned (either may be NULL), written on success only.
+ *
+ * Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (x or y NaN or infinite),
+ * UNSUPPORTED (the model is not 2-D).
+ *
+ * # Safety
+ * `model` is NULL or a live handle; `variance` and `weight_sum` are NULL or
+ * valid for writing.
+ */
+enum BrdfAtlasStatus brdf_atlas_model_confidence(const struct BrdfAtlasModel *model,
+                                                 double x,
+                                                 double y,
+                                                 double *variance,
+                                                 double *weight_sum);
+
+/**
+ * Reconstruct the whole table at latent point (x, y) under blend rule
+ * `blend`, as `brdf_atlas_model_reconstruct` does (same layout, units and
+ * buffer rules); `BRDF_ATLAS_BLEND_GP` gives the same bits as it.
+ *
+ * Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (x or y NaN or infinite, an
+ * unknown rule), UNSUPPORTED (the model is not 2-D), BUFFER_TOO_SMALL.
+ *
+ * # Safety
+ * `model` is NULL or a live handle; `buf` is NULL or valid for writing
+ * `len` doubles; `written` is NULL or valid for writing.
+ */
+enum BrdfAtlasStatus brdf_atlas_model_reconstruct_with(const struct BrdfAtlasModel *model,
+                                                       double x,
+                                                       double y,
+                                                       int32_t blend,
+                                                       double *buf,
+                                                       size_t len,
+                                                       size_t *written);
 
 /**
  * Reconstruct the whole table at latent point (x, y) into `buf`, in the

@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use brdf_atlas_core::{Model, View};
+use brdf_atlas_core::{Blend, BlendRule, Model, View};
 use brdf_atlas_core::{OptimizerKind, Precision, TransformKind};
 use brdf_merl::{Dims, Vec3};
 use clap::ValueEnum;
@@ -71,6 +71,18 @@ pub struct ModelPoint {
     /// Latent point, x,y (q numbers for a q-dimensional model).
     #[arg(long, value_name = "X,Y", value_parser = point, allow_hyphen_values = true)]
     pub at: Point,
+    /// How the point's weights are formed: `gp` (the GPLVM's prediction,
+    /// values clamped to >= 0) or `plausible` (the GP's weights moved towards
+    /// a kernel-weighted average of the materials just far enough that the
+    /// clamp removes at most 0.05% of the reflectance; one more pass over the
+    /// store).
+    #[arg(long, value_name = "RULE", default_value = "gp", value_parser = blend_rule)]
+    pub blend: BlendRule,
+}
+
+/// Parse a blend rule name.
+fn blend_rule(text: &str) -> Result<BlendRule, String> {
+    BlendRule::parse(text).ok_or_else(|| format!("expected gp or plausible, got {text:?}"))
 }
 
 impl ModelPoint {
@@ -79,6 +91,11 @@ impl ModelPoint {
         let model = Model::open(&self.model)?;
         let x = self.at.check(model.q(), &self.model)?;
         Ok((model, x))
+    }
+
+    /// The blend at the point under the chosen rule.
+    pub fn blend<'m>(&self, model: &'m Model, x: &[f64]) -> Result<Blend<'m>, Error> {
+        Ok(model.at_with(x, self.blend)?)
     }
 }
 

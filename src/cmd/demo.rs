@@ -215,7 +215,7 @@ fn reconstruct_between(state: &mut State) -> Result<(), Error> {
         .map(|c| 0.5 * (latent[(0, c)] + latent[(1, c)]))
         .collect();
     let out = state.args.dir.join(RECONSTRUCTED);
-    indented(|report| reconstruct::write(model, &x, &out, report))?;
+    indented(|report| reconstruct::write(model, &x, brdf_atlas_core::BlendRule::Gp, &out, report))?;
     state.between = Some((model.names()[0].clone(), model.names()[1].clone()));
     Ok(())
 }

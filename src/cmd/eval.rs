@@ -31,6 +31,10 @@ pub struct Args {
     /// File of pairs, one a line: theta_i phi_i theta_o phi_o (degrees; `#` starts a comment).
     #[arg(long, value_name = "FILE")]
     pub batch: Option<PathBuf>,
+    /// Also print the material's plausibility (clamped share of reflectance,
+    /// largest directional albedo): one pass over the whole store.
+    #[arg(long)]
+    pub plausibility: bool,
 }
 
 /// What every bad batch line is told.
@@ -87,7 +91,7 @@ pub fn run(args: &Args) -> Result<ExitCode, Error> {
         }
     };
     let (model, x) = args.target.open()?;
-    let blend = model.at(x)?;
+    let blend = args.target.blend(&model, x)?;
     let directions: Vec<_> = pairs
         .iter()
         .map(|(wi, wo)| (wi.direction(), wo.direction()))
@@ -116,6 +120,27 @@ pub fn run(args: &Args) -> Result<ExitCode, Error> {
             None => writeln!(out, "below horizon / unmeasured")?,
         }
     }
+    let c = blend.confidence();
+    writeln!(
+        out,
+        "confidence: predictive variance {:.4} of the prior's 1; weights sum to {:.4} ({} blend)",
+        c.variance,
+        c.weight_sum,
+        args.target.blend.name()
+    )?;
+    if args.plausibility {
+        let p = blend.plausibility();
+        writeln!(
+            out,
+            "plausibility: the clamp removes {:.4}% of the cosine-weighted reflectance ({:.4}% of the values); \
+             largest directional albedo {:.4} (at {} degrees)",
+            100.0 * p.clamped_reflectance,
+            100.0 * p.clamped_values,
+            p.max_albedo,
+            p.max_albedo_incidence
+        )?;
+    }
+    crate::cmd::reconstruct::warn(&model, x, &blend)?;
     Ok(ExitCode::SUCCESS)
 }
 

@@ -5,9 +5,10 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
-use brdf_atlas_core::Model;
+use brdf_atlas_core::{Blend, BlendRule, LOW_CONFIDENCE_VARIANCE, Model};
 use brdf_merl::Dims;
 use brdf_merl::table::HEADER_BYTES;
+use serde_json::json;
 
 use crate::args::ModelPoint;
 use crate::error::Error;
@@ -27,6 +28,11 @@ pub struct Args {
     /// MERL `.binary` file to write.
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     pub out: PathBuf,
+    /// Print one JSON record on stdout instead of the report: the point,
+    /// every material's weight, the transform's formula, the plausibility
+    /// figures and the confidence.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Input materials by the size of their blend weight at `x`, largest
@@ -39,9 +45,15 @@ pub fn contributors(weights: &[f64]) -> Vec<(usize, f64)> {
 
 /// Reconstruct the full table at `x` and write it to `out` (atomically);
 /// report the largest weights and the file.
-pub fn write(model: &Model, x: &[f64], out: &Path, report: &mut impl Write) -> Result<(), Error> {
+pub fn write(
+    model: &Model,
+    x: &[f64],
+    rule: BlendRule,
+    out: &Path,
+    report: &mut impl Write,
+) -> Result<(), Error> {
     let t0 = Instant::now();
-    let blend = model.at(x)?;
+    let blend = model.at_with(x, rule)?;
     let table = blend.table();
     table.write(out)?;
     let elapsed = t0.elapsed();
@@ -61,6 +73,29 @@ pub fn write(model: &Model, x: &[f64], out: &Path, report: &mut impl Write) -> R
         weights.len(),
         weights.iter().sum::<f64>()
     )?;
+    let plausibility = blend.plausibility();
+    let confidence = blend.confidence();
+    writeln!(
+        report,
+        "  plausibility: the clamp to >= 0 removes {} of the cosine-weighted reflectance \
+         ({} of the values); largest directional albedo {:.4} (at {} degrees){}",
+        percent(plausibility.clamped_reflectance),
+        percent(plausibility.clamped_values),
+        plausibility.max_albedo,
+        plausibility.max_albedo_incidence,
+        if plausibility.is_plausible() {
+            ""
+        } else {
+            ": NOT physically plausible"
+        }
+    )?;
+    writeln!(
+        report,
+        "  confidence: predictive variance {:.4} of the prior's 1 ({} blend)",
+        confidence.variance,
+        rule.name()
+    )?;
+    warn(model, x, &blend)?;
     let dims = table.dims();
     writeln!(
         report,
@@ -80,10 +115,72 @@ pub fn write(model: &Model, x: &[f64], out: &Path, report: &mut impl Write) -> R
     Ok(())
 }
 
+/// A share as a percentage with enough digits to tell 0.001% from 0.
+fn percent(share: f64) -> String {
+    format!("{:.4}%", 100.0 * share)
+}
+
+/// Warn on stderr where the model knows little, or the weights no longer
+/// sum to about one (the blend falls back towards the mean material).
+pub fn warn(model: &Model, x: &[f64], blend: &Blend<'_>) -> Result<(), Error> {
+    let c = blend.confidence();
+    if c.is_low() || (c.weight_sum - 1.0).abs() > 0.25 {
+        eprintln!(
+            "warning: {} knows little at {}: predictive variance {:.3} (above {} is low), \
+             weights sum to {:.3}; the material there is mostly the database's mean",
+            model.path().display(),
+            point(x),
+            c.variance,
+            LOW_CONFIDENCE_VARIANCE,
+            c.weight_sum
+        );
+    }
+    Ok(())
+}
+
+/// The JSON record of a blend: point, weights by name, transform, plausibility, confidence.
+pub fn record(model: &Model, rule: BlendRule, blend: &Blend<'_>) -> serde_json::Value {
+    let weights: serde_json::Map<String, serde_json::Value> = model
+        .names()
+        .iter()
+        .zip(blend.weights())
+        .map(|(n, w)| (n.clone(), json!(w)))
+        .collect();
+    let transform = model.file().transform;
+    let (p, c) = (blend.plausibility(), blend.confidence());
+    json!({
+        "model": model.path().display().to_string(),
+        "point": blend.point(),
+        "blend": rule.name(),
+        "weights": weights,
+        "weight_sum": blend.weights().iter().sum::<f64>(),
+        "transform": { "name": transform.name(), "formula": transform.formula() },
+        "plausibility": p,
+        "plausible": p.is_plausible(),
+        "confidence": c,
+        "low_confidence": c.is_low(),
+    })
+}
+
 /// Run `reconstruct`.
 pub fn run(args: &Args) -> Result<ExitCode, Error> {
     let (model, x) = args.target.open()?;
-    write(&model, x, &args.out, &mut io::stdout().lock())?;
+    if args.json {
+        let blend = model.at_with(x, args.target.blend)?;
+        blend.table().write(&args.out)?;
+        let mut rec = record(&model, args.target.blend, &blend);
+        rec["output"] = json!(args.out.display().to_string());
+        warn(&model, x, &blend)?;
+        writeln!(io::stdout().lock(), "{rec}")?;
+    } else {
+        write(
+            &model,
+            x,
+            args.target.blend,
+            &args.out,
+            &mut io::stdout().lock(),
+        )?;
+    }
     Ok(ExitCode::SUCCESS)
 }
 

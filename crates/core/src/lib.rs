@@ -52,8 +52,9 @@ pub use model::{
 pub use progress::{NoProgress, Progress};
 pub use query::render;
 pub use query::{
-    AlbedoMap, AlbedoMethod, Blend, DEFAULT_SAMPLES, Located, Segment, View, contour_levels,
-    contours, luminance,
+    AlbedoMap, AlbedoMethod, Blend, BlendRule, Confidence, DEFAULT_SAMPLES,
+    LOW_CONFIDENCE_VARIANCE, Located, Plausibility, Segment, View, contour_levels, contours,
+    luminance,
 };
 pub use simd::fastlog;
 

@@ -40,6 +40,7 @@ mod check;
 pub mod consts;
 pub mod contour;
 pub mod model;
+pub mod plausibility;
 pub mod query;
 pub mod status;
 
@@ -54,6 +55,10 @@ pub use model::{
     brdf_atlas_model_latent_dim, brdf_atlas_model_latent_point, brdf_atlas_model_material_count,
     brdf_atlas_model_material_name, brdf_atlas_model_open, brdf_atlas_model_table_len,
     brdf_atlas_model_view,
+};
+pub use plausibility::{
+    BRDF_ATLAS_BLEND_GP, BRDF_ATLAS_BLEND_PLAUSIBLE, BrdfAtlasPlausibility,
+    brdf_atlas_model_confidence, brdf_atlas_model_plausibility, brdf_atlas_model_reconstruct_with,
 };
 pub use query::{
     BrdfAtlasLocation, brdf_atlas_model_albedo_map, brdf_atlas_model_eval,

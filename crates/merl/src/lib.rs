@@ -17,6 +17,7 @@
 
 pub mod albedo;
 pub mod angles;
+pub mod directional;
 pub mod error;
 pub mod sniff;
 pub mod synth;
@@ -24,5 +25,6 @@ pub mod table;
 
 pub use albedo::Quadrature;
 pub use angles::{Dims, HalfDiff, Vec3};
+pub use directional::DirectionalRule;
 pub use error::{MerlError, Result};
 pub use table::{INVALID, MerlFile, MerlTable, SCALE};

@@ -32,6 +32,18 @@ impl TransformKind {
         }
     }
 
+    /// The transform and its inverse as formulas, with their constants:
+    /// what a record of a reconstruction states.
+    pub fn formula(self) -> &'static str {
+        match self {
+            TransformKind::Raw => "t = f; f = max(0, t)",
+            TransformKind::Log => {
+                "t = ln(1 + f c), c = cos(theta_i) cos(theta_o) at the bin's representative angles; \
+                 f = max(0, (e^t - 1) / c), and f = 0 where c < 1e-6"
+            }
+        }
+    }
+
     /// Parse `raw` or `log`.
     pub fn parse(s: &str) -> Option<TransformKind> {
         match s {
@@ -103,6 +115,17 @@ pub enum InverseForm {
     Linear(f64),
     /// `max(0, scale * (e^t - 1))`.
     Exp(f64),
+}
+
+/// `cos(theta_i) cos(theta_o)` of every bin of `dims`, at its representative
+/// angles, clamped at 0.
+pub(crate) fn cosine_products(dims: Dims) -> Vec<f64> {
+    (0..dims.bins())
+        .map(|b| {
+            let (ci, co) = dims.angles_of(b).cosines();
+            (ci * co).max(0.0)
+        })
+        .collect()
 }
 
 /// The identity on reflectance.

@@ -3,4 +3,5 @@
 
 pub mod loo;
 pub mod measure;
+mod nonneg;
 mod predictors;

@@ -11,8 +11,8 @@
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use brdf_merl::Dims;
 use brdf_merl::albedo::Quadrature;
+use brdf_merl::{Dims, DirectionalRule};
 use faer::linalg::solvers::Solve;
 use faer::{Mat, Side};
 
@@ -37,6 +37,10 @@ pub struct Model {
     gram: Mat<f64>,
     /// What every map of this model shares, built on first use.
     map_basis: MapBasis,
+    /// See [`Model::cosine_products`].
+    cosines: OnceLock<Vec<f64>>,
+    /// See [`Model::directional_rule`].
+    directional: OnceLock<DirectionalRule>,
 }
 
 impl std::fmt::Debug for Model {
@@ -115,6 +119,8 @@ impl Model {
             transform,
             gram,
             map_basis: MapBasis::default(),
+            cosines: OnceLock::new(),
+            directional: OnceLock::new(),
         })
     }
 
@@ -165,6 +171,11 @@ impl Model {
 
     /// The blend weights `w(x) = K^-1 k(x)` at a latent point.
     pub fn weights_at(&self, x: &[f64]) -> Result<Vec<f64>> {
+        Ok(self.kernel_and_weights_at(x)?.1)
+    }
+
+    /// `k(x)` and the GP's weights `K^-1 k(x)` at `x`, checked as [`Model::weights_at`].
+    pub(crate) fn kernel_and_weights_at(&self, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>)> {
         if x.len() != self.q() || x.iter().any(|v| !v.is_finite()) {
             return Err(CoreError::BadQuery(format!(
                 "latent point {x:?}: expected {} finite coordinates",
@@ -174,7 +185,20 @@ impl Model {
         let k = self.file.kernel.vector(self.latent.as_ref(), x);
         let col = faer::Col::from_fn(k.len(), |i| k[i]);
         let w = self.llt.solve(&col);
-        Ok(w.iter().copied().collect())
+        Ok((k, w.iter().copied().collect()))
+    }
+
+    /// `cos(theta_i) cos(theta_o)` of every bin (at its representative
+    /// angles, clamped at 0), built on first use.
+    pub(crate) fn cosine_products(&self) -> &[f64] {
+        self.cosines
+            .get_or_init(|| crate::data::transform::cosine_products(self.dims()))
+    }
+
+    /// The directional-albedo rule for the model's dims, built on first use.
+    pub(crate) fn directional_rule(&self) -> &DirectionalRule {
+        self.directional
+            .get_or_init(|| DirectionalRule::new(self.dims()))
     }
 
     /// The data transform of the store, built for its dims.

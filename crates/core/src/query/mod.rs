@@ -1,13 +1,16 @@
 //! What a fitted model answers: the material at a latent point, where a new
 //! material lands, albedo maps with their contours, and their pictures.
 
+pub(crate) mod budget;
 pub mod contour;
 pub mod locate;
 pub mod map;
+pub mod plausibility;
 pub mod reconstruct;
 pub mod render;
 
 pub use contour::{Segment, contour_levels, contours, luminance};
 pub use locate::Located;
 pub use map::{AlbedoMap, AlbedoMethod, DEFAULT_SAMPLES, View};
+pub use plausibility::{BlendRule, Confidence, LOW_CONFIDENCE_VARIANCE, Plausibility};
 pub use reconstruct::Blend;

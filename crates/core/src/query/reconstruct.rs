@@ -31,6 +31,11 @@ use crate::simd::dot;
 pub struct Blend<'m> {
     model: &'m Model,
     x: Vec<f64>,
+    /// `k(x)`, the kernel between `x` and every input material.
+    kernel: Vec<f64>,
+    /// The GP's weights `K^-1 k(x)`.
+    gp: Vec<f64>,
+    /// The weights the blend uses: `gp`, or adapted by a [`crate::query::BlendRule`].
     weights: Vec<f64>,
     /// `value(channel, bin)` of every row asked so far (see [`Memo`]).
     memo: OnceLock<Box<[AtomicU64]>>,
@@ -70,13 +75,27 @@ const TABLE_CHUNK: usize = 4096;
 impl Model {
     /// The blend at latent point `x` (`q` finite coordinates).
     pub fn at(&self, x: &[f64]) -> Result<Blend<'_>> {
-        let weights = self.weights_at(x)?;
+        let (kernel, weights) = self.kernel_and_weights_at(x)?;
         Ok(Blend {
             model: self,
             x: x.to_vec(),
+            kernel,
+            gp: weights.clone(),
             weights,
             memo: OnceLock::new(),
         })
+    }
+
+    /// A blend of the stored rows with any weights (no latent point).
+    pub(crate) fn at_weights(&self, weights: &[f64]) -> Blend<'_> {
+        Blend {
+            model: self,
+            x: Vec::new(),
+            kernel: Vec::new(),
+            gp: weights.to_vec(),
+            weights: weights.to_vec(),
+            memo: OnceLock::new(),
+        }
     }
 }
 
@@ -86,9 +105,34 @@ impl<'m> Blend<'m> {
         &self.x
     }
 
-    /// The blend weights `K^-1 k(x)`, one per input material.
+    /// The blend weights, one per input material: the GP's `K^-1 k(x)`, or
+    /// those of the [`crate::query::BlendRule`] the blend was made with.
     pub fn weights(&self) -> &[f64] {
         &self.weights
+    }
+
+    /// The GP's weights `K^-1 k(x)` at this point, whatever the rule.
+    pub fn gp_weights(&self) -> &[f64] {
+        &self.gp
+    }
+
+    /// `k(x)`: the kernel between the point and each input material.
+    pub fn kernel(&self) -> &[f64] {
+        &self.kernel
+    }
+
+    /// The model the blend reads.
+    pub(crate) fn model(&self) -> &Model {
+        self.model
+    }
+
+    /// The same point with other weights (and a fresh memo).
+    pub(crate) fn with_weights(self, weights: Vec<f64>) -> Blend<'m> {
+        Blend {
+            weights,
+            memo: OnceLock::new(),
+            ..self
+        }
     }
 
     /// The reconstruction of store row `row` in transformed space, `mean + w . z`.

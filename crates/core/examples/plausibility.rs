@@ -1,0 +1,98 @@
+//! Plausibility and confidence of a model's reconstructions at random points
+//! of the map's default view, under each blend rule.
+//!
+//! ```text
+//! cargo run --release -p brdf-atlas-core --example plausibility -- MODEL [POINTS] [SEED]
+//! ```
+//!
+//! Prints, per rule, the distribution (median, 90th, 99th percentile, worst)
+//! of the clamped share of reflectance, the clamped share of values and the
+//! largest directional albedo, and how many points are low-confidence.
+
+use brdf_atlas_core::{BlendRule, Model, NoProgress, View, loo};
+use brdf_merl::synth::SplitMix64;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut args = std::env::args().skip(1);
+    let path = args
+        .next()
+        .ok_or("usage: plausibility MODEL [POINTS] [SEED]")?;
+    let points: usize = args.next().map_or(Ok(200), |s| s.parse())?;
+    let seed: u64 = args.next().map_or(Ok(1), |s| s.parse())?;
+    let model = Model::open(&path)?;
+    let (kernel, latent) = (model.file().kernel, model.latent().as_ref());
+    let gp = loo::gp_predictor(&kernel, latent, true)?;
+    let convex = loo::convex_predictor(&kernel, latent)?;
+    let (nonneg, steps) =
+        loo::plausible_predictor(model.store(), gp.as_ref(), convex.as_ref(), &NoProgress)?;
+    let ev = loo::evaluate(model.store(), &[gp, convex, nonneg], &NoProgress)?;
+    let names = ["gp", "convex", "plausible"];
+    for (name, e) in names.iter().zip(&ev.errors) {
+        println!(
+            "leave-one-out {name:12}  ln(1 + f cos cos) RMSE {:.5}  reflectance RMSE {:.4}",
+            e.log_total(ev.scored_rows),
+            e.raw_total(ev.scored_rows)
+        );
+    }
+    let moved = steps.iter().filter(|&&t| t > 0.0).count();
+    println!(
+        "held-out materials whose weights moved: {moved} of {}",
+        steps.len()
+    );
+    let view = View::default();
+    let mut rng = SplitMix64::new(seed);
+    let xs: Vec<[f64; 2]> = (0..points)
+        .map(|_| [rng.range(view.x0, view.x1), rng.range(view.y0, view.y1)])
+        .collect();
+    for rule in [BlendRule::Gp, BlendRule::Plausible] {
+        let start = std::time::Instant::now();
+        let (mut refl, mut vals, mut alb, mut low) = (vec![], vec![], vec![], 0);
+        for x in &xs {
+            let blend = model.at_with(x, rule)?;
+            let p = blend.plausibility();
+            refl.push(p.clamped_reflectance);
+            vals.push(p.clamped_values);
+            alb.push(p.max_albedo);
+            low += usize::from(blend.confidence().is_low());
+        }
+        println!(
+            "{} ({} points, {:.1} s):",
+            rule.name(),
+            points,
+            start.elapsed().as_secs_f64()
+        );
+        for (what, v) in [
+            ("clamped reflectance %", &mut refl),
+            ("clamped values %", &mut vals),
+        ] {
+            let q = quantiles(v);
+            println!(
+                "  {what:22} median {:.4}  p90 {:.4}  p99 {:.4}  worst {:.4}  (>1%: {})",
+                100.0 * q[0],
+                100.0 * q[1],
+                100.0 * q[2],
+                100.0 * q[3],
+                v.iter().filter(|&&s| s > 0.01).count()
+            );
+        }
+        let q = quantiles(&mut alb);
+        println!(
+            "  {:22} median {:.4}  p90 {:.4}  p99 {:.4}  worst {:.4}  (>1: {})",
+            "max directional albedo",
+            q[0],
+            q[1],
+            q[2],
+            q[3],
+            alb.iter().filter(|&&a| a > 1.0).count()
+        );
+        println!("  low confidence at {low} of {points} points");
+    }
+    Ok(())
+}
+
+/// Median, 90th and 99th percentiles (nearest rank) and the largest value.
+fn quantiles(v: &mut [f64]) -> [f64; 4] {
+    v.sort_by(f64::total_cmp);
+    let at = |p: f64| v[((p * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1];
+    [at(0.5), at(0.9), at(0.99), v[v.len() - 1]]
+}

@@ -1,0 +1,141 @@
+//! The leave-one-out predictor of [`crate::BlendRule::Plausible`]: each
+//! held-out material predicted as a reconstruction at its latent point
+//! would be, from the others (see [`crate::query::budget`]). `w` (the GP's) are moved towards the kernel's convex
+//! weights `v` (a kernel-weighted average of the materials, plausible by
+//! construction): `(1 - t) w + t v`, with the smallest `t` of [`STEPS`] for
+//! which the reflectance the clamp removes is at most [`CLAMP_BUDGET`] of
+//! the GP blend's cosine-weighted reflectance. Both are linear in the
+//! weights before the inverse transform, so one pass over the store gives
+//! the removed reflectance at every step: per row, the GP value `g` and the
+//! convex value `c`, and where `g < 0` the clamped part of
+//! `g + t (c - g)` for each `t`.
+
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, MatRef, Par};
+
+use crate::data::store::{Rows, Store};
+use crate::error::{ParamError, Result};
+use crate::gplvm::kernel::{Kernel, rows_of};
+use crate::progress::Progress;
+use crate::query::budget::{Budget, counted};
+use crate::simd::fold::{GROUPS, ordered_blocks};
+
+/// Rows of the store per block of the pass.
+const BLOCK: usize = 1024;
+
+/// The convex leave-one-out predictor: `V_ij = k(x_i, x_j) / sum_{l != i} k(x_i, x_l)`
+/// for `j != i`, `V_ii = 0` (a kernel-weighted average of the others; the
+/// nearest other alone if every kernel value underflows).
+pub fn convex_predictor(kernel: &Kernel, latent: MatRef<'_, f64>) -> Result<Mat<f64>> {
+    let n = latent.nrows();
+    if n < 2 {
+        return Err(ParamError::TooFewMaterials {
+            method: "leave-one-out",
+            needs: 2,
+            got: n,
+        }
+        .into());
+    }
+    let pts = rows_of(latent);
+    let k = Mat::from_fn(n, n, |i, j| {
+        if i == j {
+            0.0
+        } else {
+            kernel.eval(&pts[i], &pts[j])
+        }
+    });
+    let dist2 =
+        |a: &[f64], b: &[f64]| -> f64 { a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum() };
+    Ok(Mat::from_fn(n, n, |i, j| {
+        let sum: f64 = (0..n).map(|l| k[(i, l)]).sum();
+        if sum > 0.0 {
+            k[(i, j)] / sum
+        } else {
+            let nearest = (0..n)
+                .filter(|&l| l != i)
+                .min_by(|&a, &b| dist2(&pts[i], &pts[a]).total_cmp(&dist2(&pts[i], &pts[b])));
+            f64::from(u8::from(Some(j) == nearest))
+        }
+    }))
+}
+
+/// The leave-one-out predictor of [`crate::BlendRule::Plausible`]: row `i`
+/// is `(1 - t_i) P_i + t_i V_i` with `t_i` chosen as a reconstruction at
+/// material `i`'s latent point would choose it, from the others. One pass
+/// over the store. Returns the predictor and the steps `t`.
+pub fn plausible_predictor(
+    store: &Store,
+    gp: MatRef<'_, f64>,
+    convex: MatRef<'_, f64>,
+    progress: &dyn Progress,
+) -> Result<(Mat<f64>, Vec<f64>)> {
+    let n = store.n();
+    for p in [gp, convex] {
+        if p.nrows() != n || p.ncols() != n {
+            return Err(ParamError::PredictorShape {
+                rows: p.nrows(),
+                cols: p.ncols(),
+                n,
+            }
+            .into());
+        }
+    }
+    let stacked = Mat::from_fn(2 * n, n, |r, j| {
+        if r < n {
+            gp[(r, j)]
+        } else {
+            convex[(r - n, j)]
+        }
+    });
+    let dims = store.dims();
+    let transform = store.transform().build(dims);
+    let cos = crate::data::transform::cosine_products(dims);
+    let mean = store.mean();
+    progress.start("plausible steps", store.rows() as u64);
+    let parts = ordered_blocks(
+        store.rows(),
+        BLOCK,
+        GROUPS,
+        || {
+            (
+                Budget::new(n),
+                vec![0.0f64; BLOCK * n],
+                vec![0.0f64; BLOCK * 2 * n],
+            )
+        },
+        |(budget, zbuf, out), range| {
+            let (r0, r1, len) = (range.start, range.end, range.len());
+            let z = &mut zbuf[..len * n];
+            match store.z() {
+                Rows::F32(s) => z
+                    .iter_mut()
+                    .zip(&s[r0 * n..r1 * n])
+                    .for_each(|(o, v)| *o = *v as f64),
+                Rows::F64(s) => z.copy_from_slice(&s[r0 * n..r1 * n]),
+            }
+            let zc = MatRef::from_column_major_slice(z, n, len);
+            let o = faer::MatMut::from_column_major_slice_mut(&mut out[..len * 2 * n], 2 * n, len);
+            matmul(o, Accum::Replace, stacked.as_ref(), zc, 1.0, Par::Seq);
+            for k in 0..len {
+                let row = r0 + k;
+                let Some(form) = counted(store, transform.as_ref(), row) else {
+                    continue;
+                };
+                let col = &mut out[k * 2 * n..(k + 1) * 2 * n];
+                col.iter_mut().for_each(|v| *v += mean[row]);
+                budget.add(&col[..n], &col[n..], form, cos[row % dims.bins()]);
+            }
+            progress.advance(len as u64);
+        },
+    );
+    progress.finish();
+    let mut budget = Budget::new(n);
+    for (b, _, _) in &parts {
+        budget.merge(b);
+    }
+    let steps = budget.steps();
+    let p = Mat::from_fn(n, n, |i, j| {
+        (1.0 - steps[i]) * gp[(i, j)] + steps[i] * convex[(i, j)]
+    });
+    Ok((p, steps))
+}

@@ -1,0 +1,103 @@
+//! The step of [`crate::BlendRule::Plausible`].
+//!
+//! A blend's weights `w` (the GP's) are moved towards the kernel's convex
+//! weights `v` (a kernel-weighted average of the materials, plausible by
+//! construction): `(1 - t) w + t v`, with the smallest `t` of [`STEPS`] for
+//! which the reflectance the clamp removes is at most [`CLAMP_BUDGET`] of
+//! the blend's cosine-weighted reflectance. Both blends are linear in the
+//! weights before the inverse transform, so one pass over the store gives
+//! the reflectance and its clamped part at every step: per row, the GP value
+//! `g`, the convex value `c`, and `g + t (c - g)` for each `t`.
+
+use crate::data::store::Store;
+use crate::data::transform::{InverseForm, Transform};
+
+/// The steps tried, smallest first: the rule takes the first that meets the budget.
+pub const STEPS: [f64; 13] = [
+    0.0,
+    1.0 / 64.0,
+    1.0 / 32.0,
+    1.0 / 16.0,
+    1.0 / 8.0,
+    3.0 / 16.0,
+    1.0 / 4.0,
+    3.0 / 8.0,
+    1.0 / 2.0,
+    5.0 / 8.0,
+    3.0 / 4.0,
+    7.0 / 8.0,
+    1.0,
+];
+
+/// The share of a blend's cosine-weighted reflectance that the clamp may
+/// remove before the weights are moved: 0.05%.
+pub const CLAMP_BUDGET: f64 = 5e-4;
+
+/// Per predicted material and each of [`STEPS`]: the cosine-weighted
+/// reflectance of the blend (absolute values) and the part the clamp removes.
+#[derive(Clone)]
+pub(crate) struct Budget {
+    total: Vec<[f64; STEPS.len()]>,
+    clamped: Vec<[f64; STEPS.len()]>,
+}
+
+impl Budget {
+    pub(crate) fn new(n: usize) -> Budget {
+        Budget {
+            total: vec![[0.0; STEPS.len()]; n],
+            clamped: vec![[0.0; STEPS.len()]; n],
+        }
+    }
+
+    /// Add one row: `g[i]`, `c[i]` are the GP and convex values of material
+    /// `i` in transformed space (mean included), `form` the row's inverse
+    /// transform, `cos` its `cos_i cos_o`.
+    #[inline]
+    pub(crate) fn add(&mut self, g: &[f64], c: &[f64], form: InverseForm, cos: f64) {
+        let f = |t: f64| match form {
+            InverseForm::Linear(s) => s * t,
+            InverseForm::Exp(s) => s * t.exp_m1(),
+        };
+        for i in 0..g.len() {
+            for (k, t) in STEPS.iter().enumerate() {
+                let v = f(g[i] + t * (c[i] - g[i]));
+                self.total[i][k] += v.abs() * cos;
+                self.clamped[i][k] += (-v).max(0.0) * cos;
+            }
+        }
+    }
+
+    /// Fold another partial sum in (call in a fixed order).
+    pub(crate) fn merge(&mut self, other: &Budget) {
+        for i in 0..self.total.len() {
+            for k in 0..STEPS.len() {
+                self.total[i][k] += other.total[i][k];
+                self.clamped[i][k] += other.clamped[i][k];
+            }
+        }
+    }
+
+    /// The step each material takes.
+    pub(crate) fn steps(&self) -> Vec<f64> {
+        (0..self.total.len())
+            .map(|i| {
+                (0..STEPS.len())
+                    .find(|&k| self.clamped[i][k] <= CLAMP_BUDGET * self.total[i][k])
+                    .map_or(1.0, |k| STEPS[k])
+            })
+            .collect()
+    }
+}
+
+/// The inverse transform's form at `row`, or `None` where the row does not
+/// count: unmeasured, or zeroed by the transform whatever its value.
+#[inline]
+pub(crate) fn counted(store: &Store, transform: &dyn Transform, row: usize) -> Option<InverseForm> {
+    if store.unmeasured()[row] != 0 {
+        return None;
+    }
+    match transform.inverse_form(row % store.dims().bins()) {
+        InverseForm::Exp(s) | InverseForm::Linear(s) if s == 0.0 => None,
+        form => Some(form),
+    }
+}

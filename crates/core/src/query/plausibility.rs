@@ -1,0 +1,248 @@
+//! Is the material at a latent point a physical one, and does the model know
+//! anything there?
+//!
+//! - [`Plausibility`]: what the blend `mean + w . Z` does before the inverse
+//!   transform clamps it to `>= 0`: the share of the cosine-weighted
+//!   reflectance the clamp removes, the share of values it touches, and the
+//!   largest directional albedo of the result (a physical BRDF reflects no
+//!   more than it receives: at most 1).
+//! - [`Confidence`]: the GP's predictive variance `1 - k(x)^T K^-1 k(x)`
+//!   (the kernel has unit signal variance, so 0 at a material and 1 where
+//!   the data say nothing), and the sum of the weights.
+//! - [`BlendRule`]: the GP's weights as they are, or moved just far enough
+//!   towards the kernel's convex weights `k / sum(k)` that no measured value
+//!   goes negative.
+//!
+//! A full [`Plausibility`] reads the whole store once (as a table does); the
+//! confidence costs nothing beyond the weights.
+
+use brdf_merl::directional::largest;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::data::transform::InverseForm;
+use crate::error::Result;
+use crate::model::Model;
+use crate::query::budget::{Budget, counted};
+use crate::query::reconstruct::Blend;
+
+/// Rows a worker handles at once (fixed, so sums do not depend on the thread count).
+const CHUNK: usize = 4096;
+
+/// Above this predictive variance (out of the prior's 1) a point is reported
+/// as one where the model knows little: the data explain less than half of
+/// what the material there could be.
+pub const LOW_CONFIDENCE_VARIANCE: f64 = 0.5;
+
+/// How a latent point's weights are formed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum BlendRule {
+    /// The GP's mean: `w = K^-1 k(x)`, the paper's reconstruction. Between
+    /// dissimilar materials its weights take mixed signs and the blend can
+    /// go negative; the inverse transform then clamps it.
+    #[default]
+    Gp,
+    /// `w' = (1 - t) w + t k / sum(k)` with the smallest `t` of
+    /// [`crate::loo::STEPS`] for which the clamp removes at most
+    /// [`crate::loo::CLAMP_BUDGET`] of the blend's cosine-weighted
+    /// reflectance: the GP's weights wherever they are plausible, and the
+    /// least step along the segment to the convex blend (plausible by
+    /// construction: a convex blend of non-negative values) where they are
+    /// not. Costs one extra pass over the store per latent point.
+    Plausible,
+}
+
+impl BlendRule {
+    /// The name used on the command line and in records.
+    pub fn name(self) -> &'static str {
+        match self {
+            BlendRule::Gp => "gp",
+            BlendRule::Plausible => "plausible",
+        }
+    }
+
+    /// Parse a [`BlendRule::name`].
+    pub fn parse(s: &str) -> Option<BlendRule> {
+        [BlendRule::Gp, BlendRule::Plausible]
+            .into_iter()
+            .find(|r| r.name() == s)
+    }
+}
+
+/// How physical the material of a blend is (see the module documentation).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Plausibility {
+    /// Share of the cosine-weighted reflectance the clamp removes:
+    /// `sum max(-f, 0) c / sum |f| c` over measured bins and channels, with
+    /// `f` before the clamp and `c = cos(theta_i) cos(theta_o)`.
+    pub clamped_reflectance: f64,
+    /// Share of measured values (bins x channels) below zero before the clamp.
+    pub clamped_values: f64,
+    /// Largest directional albedo of the clamped material, over channels and
+    /// the incidence angles of [`brdf_merl::directional::INCIDENCE_DEGREES`].
+    pub max_albedo: f64,
+    /// The incidence (degrees from the normal) of `max_albedo`.
+    pub max_albedo_incidence: f64,
+}
+
+impl Plausibility {
+    /// Does the material meet the plausibility bar: nothing clamped beyond
+    /// 1% of its reflectance and no directional albedo above 1?
+    pub fn is_plausible(&self) -> bool {
+        self.clamped_reflectance <= 0.01 && self.max_albedo <= 1.0
+    }
+}
+
+/// What the model knows at a latent point.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Confidence {
+    /// The GP's predictive variance `1 - k^T K^-1 k`, in units of the prior:
+    /// 0 at an input material, 1 far from all of them.
+    pub variance: f64,
+    /// The sum of the blend's weights (about 1 among the data, towards 0 far
+    /// from it, where the blend falls back to the mean material).
+    pub weight_sum: f64,
+}
+
+impl Confidence {
+    /// The model knows little here ([`LOW_CONFIDENCE_VARIANCE`]).
+    pub fn is_low(&self) -> bool {
+        self.variance > LOW_CONFIDENCE_VARIANCE
+    }
+}
+
+impl Model {
+    /// The blend at `x` under `rule`.
+    pub fn at_with(&self, x: &[f64], rule: BlendRule) -> Result<Blend<'_>> {
+        let blend = self.at(x)?;
+        match rule {
+            BlendRule::Gp => Ok(blend),
+            BlendRule::Plausible => {
+                let sum: f64 = blend.kernel().iter().sum();
+                if sum.is_nan() || sum <= 0.0 {
+                    // Underflowed kernel: the GP blend is the mean, plausible as it is.
+                    return Ok(blend);
+                }
+                let convex: Vec<f64> = blend.kernel().iter().map(|k| k / sum).collect();
+                let t = self.plausible_step(blend.weights(), &convex);
+                if t == 0.0 {
+                    return Ok(blend);
+                }
+                let w = blend
+                    .weights()
+                    .iter()
+                    .zip(&convex)
+                    .map(|(w, c)| (1.0 - t) * w + t * c)
+                    .collect();
+                Ok(blend.with_weights(w))
+            }
+        }
+    }
+
+    /// The step of [`BlendRule::Plausible`] from weights `w` towards `v`:
+    /// one pass over the store (see [`crate::loo::STEPS`]).
+    fn plausible_step(&self, w: &[f64], v: &[f64]) -> f64 {
+        let store = self.store();
+        let rows = store.rows();
+        let bins = self.dims().bins();
+        let cosines = self.cosine_products();
+        let (gp, convex) = (self.at_weights(w), self.at_weights(v));
+        let parts: Vec<Budget> = (0..rows.div_ceil(CHUNK))
+            .into_par_iter()
+            .map_init(
+                || (vec![0.0; CHUNK], vec![0.0; CHUNK]),
+                |(tg, tc), k| {
+                    let r0 = k * CHUNK;
+                    let len = CHUNK.min(rows - r0);
+                    gp.transformed_rows(r0, &mut tg[..len]);
+                    convex.transformed_rows(r0, &mut tc[..len]);
+                    let mut budget = Budget::new(1);
+                    for j in 0..len {
+                        let row = r0 + j;
+                        if let Some(form) = counted(store, self.transform(), row) {
+                            budget.add(&tg[j..=j], &tc[j..=j], form, cosines[row % bins]);
+                        }
+                    }
+                    budget
+                },
+            )
+            .collect();
+        let mut budget = Budget::new(1);
+        for p in &parts {
+            budget.merge(p);
+        }
+        budget.steps()[0]
+    }
+}
+
+impl Blend<'_> {
+    /// What the model knows at this point.
+    pub fn confidence(&self) -> Confidence {
+        let kw: f64 = self
+            .kernel()
+            .iter()
+            .zip(self.gp_weights())
+            .map(|(k, w)| k * w)
+            .sum();
+        Confidence {
+            variance: (1.0 - kw).clamp(0.0, 1.0),
+            weight_sum: self.weights().iter().sum(),
+        }
+    }
+
+    /// How physical this material is: one pass over the store for the clamp
+    /// figures, and point queries at the bins of the directional-albedo rule.
+    pub fn plausibility(&self) -> Plausibility {
+        let model = self.model();
+        let store = model.store();
+        let (rows, bins) = (store.rows(), model.dims().bins());
+        let unmeasured = store.unmeasured();
+        let cosines = model.cosine_products();
+        let parts: Vec<[f64; 4]> = (0..rows.div_ceil(CHUNK))
+            .into_par_iter()
+            .map_init(
+                || vec![0.0; CHUNK],
+                |t, k| {
+                    let r0 = k * CHUNK;
+                    let len = CHUNK.min(rows - r0);
+                    self.transformed_rows(r0, &mut t[..len]);
+                    // [removed, total, values clamped, values measured]
+                    let mut acc = [0.0f64; 4];
+                    for (row, &v) in (r0..r0 + len).zip(t.iter()) {
+                        if unmeasured[row] != 0 {
+                            continue;
+                        }
+                        let bin = row % bins;
+                        let f = match model.transform().inverse_form(bin) {
+                            InverseForm::Linear(s) => s * v,
+                            InverseForm::Exp(s) => s * v.exp_m1(),
+                        };
+                        let c = cosines[bin];
+                        acc[0] += (-f).max(0.0) * c;
+                        acc[1] += f.abs() * c;
+                        acc[2] += f64::from(u8::from(f < 0.0));
+                        acc[3] += 1.0;
+                    }
+                    acc
+                },
+            )
+            .collect();
+        let mut sum = [0.0f64; 4];
+        for p in &parts {
+            for (s, v) in sum.iter_mut().zip(p) {
+                *s += v;
+            }
+        }
+        let share = |a: f64, b: f64| if b > 0.0 { a / b } else { 0.0 };
+        let rule = model.directional_rule();
+        let (max_albedo, max_albedo_incidence) =
+            largest(&rule.integrate(|b| self.rgb(b).unwrap_or([0.0; 3])));
+        Plausibility {
+            clamped_reflectance: share(sum[0], sum[1]),
+            clamped_values: share(sum[2], sum[3]),
+            max_albedo,
+            max_albedo_incidence,
+        }
+    }
+}

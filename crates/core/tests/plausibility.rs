@@ -1,0 +1,245 @@
+//! Plausibility, confidence and the plausible blend rule, against dense
+//! recomputations from the stored rows.
+
+use std::path::{Path, PathBuf};
+
+use brdf_atlas_core::loo::{CLAMP_BUDGET, STEPS};
+use brdf_atlas_core::{BlendRule, FitOptions, GplvmParams, Model, NoProgress, Precision};
+use brdf_atlas_core::{TransformKind, fit_dir};
+use brdf_merl::directional::largest;
+use brdf_merl::{Dims, DirectionalRule, synth};
+use faer::linalg::solvers::DenseSolveCore;
+
+const DIMS: Dims = Dims {
+    theta_h: 12,
+    theta_d: 12,
+    phi_d: 24,
+};
+
+fn fit(dir: &Path, count: usize, transform: TransformKind) -> PathBuf {
+    let data = dir.join(format!("data-{count}"));
+    if !data.exists() {
+        synth::write_dir(&data, count, DIMS, 5).unwrap();
+    }
+    let model = dir.join(format!("{}-{count}.atlas", transform.name()));
+    let options = FitOptions {
+        params: GplvmParams::new(2).check().unwrap(),
+        transform,
+        precision: Precision::F64,
+    };
+    fit_dir(&data, &model, &options, &NoProgress).unwrap();
+    model
+}
+
+/// `(removed, total, negative values, measured values)` of weights `w`,
+/// recomputed row by row in plain f64 from the stored rows.
+fn dense_clamp(m: &Model, w: &[f64]) -> [f64; 4] {
+    let store = m.store();
+    let (n, bins) = (store.n(), DIMS.bins());
+    let kind = m.file().transform;
+    let mut acc = [0.0; 4];
+    let mut z = vec![0.0; n];
+    for row in 0..store.rows() {
+        if store.unmeasured()[row] != 0 {
+            continue;
+        }
+        store.copy_rows(row, &mut z);
+        let v = store.mean()[row] + w.iter().zip(&z).map(|(a, b)| a * b).sum::<f64>();
+        let bin = row % bins;
+        let (ci, co) = DIMS.angles_of(bin).cosines();
+        let c = (ci * co).max(0.0);
+        // The inverse transforms before their clamp (TransformKind::formula).
+        let f = match kind {
+            TransformKind::Raw => v,
+            TransformKind::Log if c < 1e-6 => 0.0,
+            TransformKind::Log => v.exp_m1() / c,
+        };
+        acc[0] += (-f).max(0.0) * c;
+        acc[1] += f.abs() * c;
+        acc[2] += f64::from(u8::from(f < 0.0));
+        acc[3] += 1.0;
+    }
+    acc
+}
+
+/// Points where the GP blend of the small synthetic models overshoots.
+const POINTS: [[f64; 2]; 5] = [
+    [0.31, -0.42],
+    [-0.9, 0.8],
+    [1.05, 1.05],
+    [-1.1, -0.2],
+    [0.0, 0.0],
+];
+
+#[test]
+fn clamp_figures_equal_a_dense_recomputation() {
+    let tmp = tempfile::tempdir().unwrap();
+    for transform in [TransformKind::Raw, TransformKind::Log] {
+        let m = Model::open(fit(tmp.path(), 12, transform)).unwrap();
+        let mut clamped_somewhere = false;
+        for x in POINTS {
+            let b = m.at(&x).unwrap();
+            let p = b.plausibility();
+            let d = dense_clamp(&m, b.weights());
+            let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1e-12);
+            assert!(
+                close(p.clamped_reflectance, d[0] / d[1]),
+                "{transform:?} {x:?}: {p:?} {d:?}"
+            );
+            assert!(close(p.clamped_values, d[2] / d[3]), "{transform:?} {x:?}");
+            clamped_somewhere |= d[0] > 0.0;
+            // The largest directional albedo is the rule's on the written table.
+            let rule = DirectionalRule::new(DIMS);
+            let table = b.table();
+            let (a, deg) = largest(&rule.integrate(|bin| table.rgb_or_zero(bin)));
+            assert!(
+                close(p.max_albedo, a) && p.max_albedo_incidence == deg,
+                "{x:?}"
+            );
+        }
+        assert!(
+            clamped_somewhere,
+            "{transform:?}: no test point exercises the clamp"
+        );
+    }
+}
+
+#[test]
+fn confidence_is_the_predictive_variance() {
+    let tmp = tempfile::tempdir().unwrap();
+    let m = Model::open(fit(tmp.path(), 12, TransformKind::Log)).unwrap();
+    let kernel = m.file().kernel;
+    let latent = m.latent();
+    // At an input material: the noise is all that is left.
+    let xi: Vec<f64> = (0..2).map(|c| latent[(3, c)]).collect();
+    let c = m.at(&xi).unwrap().confidence();
+    assert!(c.variance < 1e-3 && !c.is_low(), "{c:?}");
+    // Far away: nothing known, the weights vanish.
+    let c = m.at(&[40.0, -40.0]).unwrap().confidence();
+    assert!(
+        c.variance > 0.999 && c.is_low() && c.weight_sum.abs() < 1e-6,
+        "{c:?}"
+    );
+    // In between: 1 - k^T K^-1 k with K^-1 from an LU inverse.
+    let x = [0.37, -0.21];
+    let inv = kernel.matrix(latent.as_ref()).partial_piv_lu().inverse();
+    let k = kernel.vector(latent.as_ref(), &x);
+    let n = k.len();
+    let quad: f64 = (0..n)
+        .map(|i| (0..n).map(|j| k[i] * inv[(i, j)] * k[j]).sum::<f64>())
+        .sum();
+    let c = m.at(&x).unwrap().confidence();
+    assert!(
+        (c.variance - (1.0 - quad).clamp(0.0, 1.0)).abs() < 1e-9,
+        "{c:?} vs {quad}"
+    );
+}
+
+#[test]
+fn the_plausible_rule_keeps_the_clamp_within_budget_and_the_gp_where_it_already_is() {
+    let tmp = tempfile::tempdir().unwrap();
+    for transform in [TransformKind::Raw, TransformKind::Log] {
+        let m = Model::open(fit(tmp.path(), 12, transform)).unwrap();
+        let mut moved = 0;
+        for x in POINTS {
+            let gp = m.at_with(&x, BlendRule::Gp).unwrap();
+            let pl = m.at_with(&x, BlendRule::Plausible).unwrap();
+            let share = |w: &[f64]| {
+                let d = dense_clamp(&m, w);
+                d[0] / d[1]
+            };
+            let (sg, sp) = (share(gp.weights()), share(pl.weights()));
+            if sg <= CLAMP_BUDGET {
+                assert_eq!(
+                    gp.weights(),
+                    pl.weights(),
+                    "{transform:?} {x:?}: moved within budget"
+                );
+                continue;
+            }
+            moved += 1;
+            // The weights lie on the segment to the convex blend at one of the steps.
+            let sum: f64 = gp.kernel().iter().sum();
+            let i = (0..gp.weights().len())
+                .max_by(|&a, &b| {
+                    let d = |j: usize| (gp.kernel()[j] / sum - gp.weights()[j]).abs();
+                    d(a).total_cmp(&d(b))
+                })
+                .unwrap();
+            let t = (pl.weights()[i] - gp.weights()[i]) / (gp.kernel()[i] / sum - gp.weights()[i]);
+            assert!(
+                STEPS.iter().any(|s| (s - t).abs() < 1e-9),
+                "{x:?}: step {t}"
+            );
+            // Within budget, unless even the convex blend (t = 1) is not.
+            assert!(
+                sp <= CLAMP_BUDGET * (1.0 + 1e-9) || t == 1.0,
+                "{transform:?} {x:?}: {sg} -> {sp} at t = {t}"
+            );
+            assert!(sp < sg, "{transform:?} {x:?}");
+            // The smallest such step: the one before it is over budget.
+            let k = STEPS.iter().position(|s| (s - t).abs() < 1e-9).unwrap();
+            if k > 0 {
+                let prev: Vec<f64> = gp
+                    .weights()
+                    .iter()
+                    .zip(gp.kernel())
+                    .map(|(w, kv)| (1.0 - STEPS[k - 1]) * w + STEPS[k - 1] * kv / sum)
+                    .collect();
+                assert!(
+                    share(&prev) > CLAMP_BUDGET,
+                    "{x:?}: a smaller step was enough"
+                );
+            }
+        }
+        assert!(moved > 0, "{transform:?}: no test point moved the weights");
+    }
+}
+
+/// Hard cases: two materials, twins, and a point far away, stay finite
+/// under both rules.
+#[test]
+fn hard_cases_stay_finite() {
+    let tmp = tempfile::tempdir().unwrap();
+    let twins = tmp.path().join("twins");
+    synth::write_dir(&twins, 3, DIMS, 9).unwrap();
+    let first = std::fs::read_dir(&twins)
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    std::fs::copy(&first, twins.join("zz-twin.binary")).unwrap();
+    let two = tmp.path().join("two");
+    synth::write_dir(&two, 2, DIMS, 11).unwrap();
+    // Two materials allow one latent dimension.
+    for (dir, name, q) in [(&twins, "twins", 2), (&two, "two", 1)] {
+        let model = tmp.path().join(format!("{name}.atlas"));
+        let options = FitOptions {
+            params: GplvmParams::new(q).check().unwrap(),
+            transform: TransformKind::Log,
+            precision: Precision::F64,
+        };
+        fit_dir(dir, &model, &options, &NoProgress).unwrap();
+        let m = Model::open(&model).unwrap();
+        for x in [[0.0, 0.0], [0.9, -0.9], [30.0, 30.0]] {
+            for rule in [BlendRule::Gp, BlendRule::Plausible] {
+                let b = m.at_with(&x[..q], rule).unwrap();
+                let (p, c) = (b.plausibility(), b.confidence());
+                assert!(
+                    [
+                        p.clamped_reflectance,
+                        p.clamped_values,
+                        p.max_albedo,
+                        c.variance,
+                        c.weight_sum
+                    ]
+                    .iter()
+                    .all(|v| v.is_finite()),
+                    "{name} {x:?} {rule:?}: {p:?} {c:?}"
+                );
+                assert!(b.weights().iter().all(|w| w.is_finite()));
+            }
+        }
+    }
+}

@@ -1,0 +1,163 @@
+//! How physical the material at a latent point is, and how much the model
+//! knows there; the table under a chosen blend rule.
+
+use brdf_atlas_core::BlendRule;
+
+use crate::check;
+use crate::model::{self as handle, BrdfAtlasModel};
+use crate::status::{BrdfAtlasStatus, Failure, Result, run};
+
+/// The GPLVM's own weights `K^-1 k(x)` (the paper's reconstruction; what
+/// `brdf_atlas_model_reconstruct` uses).
+pub const BRDF_ATLAS_BLEND_GP: i32 = 0;
+/// The GP's weights moved towards a kernel-weighted average of the materials
+/// just far enough that the clamp to >= 0 removes at most 0.05% of the
+/// cosine-weighted reflectance (one more pass over the store).
+pub const BRDF_ATLAS_BLEND_PLAUSIBLE: i32 = 1;
+
+/// What the model knows at a latent point and how physical its material is.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BrdfAtlasPlausibility {
+    /// Share (0..1) of the cosine-weighted reflectance that the clamp to
+    /// >= 0 removes (values before the clamp, over measured bins).
+    pub clamped_reflectance: f64,
+    /// Share (0..1) of the measured values that are negative before the clamp.
+    pub clamped_values: f64,
+    /// Largest directional albedo of the material over channels and
+    /// incidence angles (a physical material has at most 1).
+    pub max_albedo: f64,
+    /// Incidence of `max_albedo`, degrees from the normal.
+    pub max_albedo_incidence: f64,
+    /// The GP's predictive variance, 0 at an input material, 1 where the
+    /// data say nothing.
+    pub variance: f64,
+    /// The sum of the blend weights (towards 0 far from the data).
+    pub weight_sum: f64,
+    /// 1 when `clamped_reflectance <= 0.01` and `max_albedo <= 1`, else 0.
+    pub plausible: i32,
+    /// 1 when `variance > 0.5`: the model knows little here.
+    pub low_confidence: i32,
+}
+
+/// The blend rule of a C constant.
+fn rule(value: i32) -> Result<BlendRule> {
+    match value {
+        BRDF_ATLAS_BLEND_GP => Ok(BlendRule::Gp),
+        BRDF_ATLAS_BLEND_PLAUSIBLE => Ok(BlendRule::Plausible),
+        v => Err(Failure::invalid(format!(
+            "blend rule {v}: expected BRDF_ATLAS_BLEND_GP (0) or BRDF_ATLAS_BLEND_PLAUSIBLE (1)"
+        ))),
+    }
+}
+
+/// Plausibility and confidence of the material at latent point (x, y) under
+/// blend rule `blend` (`BRDF_ATLAS_BLEND_GP` or `BRDF_ATLAS_BLEND_PLAUSIBLE`).
+/// Reads the whole store once (about as long as a reconstruction).
+///
+/// Ownership: `model` is borrowed; `out` is caller-owned, written on success only.
+///
+/// Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (x or y NaN or infinite, an
+/// unknown rule), UNSUPPORTED (the model is not 2-D).
+///
+/// # Safety
+/// `model` is NULL or a live handle; `out` is NULL or valid for writing.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn brdf_atlas_model_plausibility(
+    model: *const BrdfAtlasModel,
+    x: f64,
+    y: f64,
+    blend: i32,
+    out: *mut BrdfAtlasPlausibility,
+) -> BrdfAtlasStatus {
+    run("brdf_atlas_model_plausibility", || {
+        let m = unsafe { handle::borrow(model) }?;
+        let out = unsafe { check::out(out, "out") }?;
+        let p = check::point(m, x, y)?;
+        let b = m.at_with(&p, rule(blend)?)?;
+        let (pl, c) = (b.plausibility(), b.confidence());
+        *out = BrdfAtlasPlausibility {
+            clamped_reflectance: pl.clamped_reflectance,
+            clamped_values: pl.clamped_values,
+            max_albedo: pl.max_albedo,
+            max_albedo_incidence: pl.max_albedo_incidence,
+            variance: c.variance,
+            weight_sum: c.weight_sum,
+            plausible: i32::from(pl.is_plausible()),
+            low_confidence: i32::from(c.is_low()),
+        };
+        Ok(())
+    })
+}
+
+/// The GP's predictive variance at latent point (x, y) (0 at an input
+/// material, 1 where the data say nothing; above 0.5 the model knows
+/// little) and the sum of the blend weights. Costs as much as
+/// `brdf_atlas_model_weights`: no pass over the store.
+///
+/// Ownership: `model` is borrowed; `variance` and `weight_sum` are
+/// caller-owned (either may be NULL), written on success only.
+///
+/// Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (x or y NaN or infinite),
+/// UNSUPPORTED (the model is not 2-D).
+///
+/// # Safety
+/// `model` is NULL or a live handle; `variance` and `weight_sum` are NULL or
+/// valid for writing.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn brdf_atlas_model_confidence(
+    model: *const BrdfAtlasModel,
+    x: f64,
+    y: f64,
+    variance: *mut f64,
+    weight_sum: *mut f64,
+) -> BrdfAtlasStatus {
+    run("brdf_atlas_model_confidence", || {
+        let m = unsafe { handle::borrow(model) }?;
+        let variance = unsafe { check::optional_out(variance, "variance") }?;
+        let weight_sum = unsafe { check::optional_out(weight_sum, "weight_sum") }?;
+        let p = check::point(m, x, y)?;
+        let c = m.at(&p)?.confidence();
+        if let Some(v) = variance {
+            *v = c.variance;
+        }
+        if let Some(w) = weight_sum {
+            *w = c.weight_sum;
+        }
+        Ok(())
+    })
+}
+
+/// Reconstruct the whole table at latent point (x, y) under blend rule
+/// `blend`, as `brdf_atlas_model_reconstruct` does (same layout, units and
+/// buffer rules); `BRDF_ATLAS_BLEND_GP` gives the same bits as it.
+///
+/// Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (x or y NaN or infinite, an
+/// unknown rule), UNSUPPORTED (the model is not 2-D), BUFFER_TOO_SMALL.
+///
+/// # Safety
+/// `model` is NULL or a live handle; `buf` is NULL or valid for writing
+/// `len` doubles; `written` is NULL or valid for writing.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn brdf_atlas_model_reconstruct_with(
+    model: *const BrdfAtlasModel,
+    x: f64,
+    y: f64,
+    blend: i32,
+    buf: *mut f64,
+    len: usize,
+    written: *mut usize,
+) -> BrdfAtlasStatus {
+    run("brdf_atlas_model_reconstruct_with", || {
+        let m = unsafe { handle::borrow(model) }?;
+        let p = check::point(m, x, y)?;
+        let out = unsafe { check::buffer(buf, len, m.dims().values(), "buf") }?;
+        let written = unsafe { check::optional_out(written, "written") }?;
+        let table = m.at_with(&p, rule(blend)?)?.table();
+        out.copy_from_slice(table.raw());
+        if let Some(w) = written {
+            *w = out.len();
+        }
+        Ok(())
+    })
+}
