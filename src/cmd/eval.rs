@@ -93,6 +93,7 @@ pub fn run(args: &Args) -> Result<ExitCode, Error> {
         .map(|(wi, wo)| (wi.direction(), wo.direction()))
         .collect();
     let values = blend.eval_batch(&directions);
+    model.verify()?;
     let mut out = io::stdout().lock();
     writeln!(
         out,

@@ -42,7 +42,7 @@ pub fn contributors(weights: &[f64]) -> Vec<(usize, f64)> {
 pub fn write(model: &Model, x: &[f64], out: &Path, report: &mut impl Write) -> Result<(), Error> {
     let t0 = Instant::now();
     let blend = model.at(x)?;
-    let table = blend.table();
+    let table = blend.table()?;
     table.write(out)?;
     let elapsed = t0.elapsed();
     let weights = blend.weights();
