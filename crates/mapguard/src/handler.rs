@@ -29,9 +29,10 @@ static PREVIOUS: OnceLock<libc::sigaction> = OnceLock::new();
 pub(crate) fn install() -> bool {
     static INSTALLED: OnceLock<bool> = OnceLock::new();
     *INSTALLED.get_or_init(|| {
-        // SAFETY: sigaction with a NULL new action only reads the current
-        // one into `old`, a zeroed plain-data struct.
+        // SAFETY: all-zero bytes are a valid sigaction (plain data).
         let mut old: libc::sigaction = unsafe { std::mem::zeroed() };
+        // SAFETY: with a NULL new action, sigaction only writes the current
+        // one into `old`, which is valid for writing.
         if unsafe { libc::sigaction(libc::SIGBUS, std::ptr::null(), &mut old) } != 0 {
             return false;
         }
@@ -102,6 +103,7 @@ unsafe fn chain(sig: c_int, info: *mut libc::siginfo_t, context: *mut c_void) {
         libc::SIG_IGN => {
             // A fault cannot be ignored (returning would fault again
             // forever): the kernel kills the process then, and so do we.
+            // SAFETY: a non-NULL `info` is the kernel's valid siginfo_t.
             if info.is_null() || unsafe { (*info).si_code } > 0 {
                 // SAFETY: as in `die`.
                 unsafe { die(sig) }
