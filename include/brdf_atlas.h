@@ -141,7 +141,9 @@ typedef enum BrdfAtlasStatus {
     BRDF_ATLAS_STATUS_IO = 5,
     /**
      * A model or store file is malformed, of another version, or changed
-     * since the fit.
+     * since the fit; or a store or MERL file changed on disk while the
+     * library had it open (the handle then refuses every call until
+     * reopened).
      */
     BRDF_ATLAS_STATUS_BAD_FILE = 6,
     /**
@@ -385,6 +387,19 @@ enum BrdfAtlasStatus brdf_atlas_contours(const float *rgb,
  * IO (missing or unreadable file or store), BAD_FILE (not a model, another
  * version, store changed), NOT_POSITIVE_DEFINITE.
  *
+ * The store stays memory-mapped while the handle lives. If another
+ * program truncates it or rewrites it in place meanwhile (`cp` or a shell
+ * redirection over it), the process does not die: the call that reads the
+ * store returns BAD_FILE with a message naming the store and saying it
+ * changed on disk while open, and so does every later call on this
+ * handle until it is freed and the model reopened. Replacing the store by
+ * a rename (as `brdf-atlas fit` does) changes nothing for an open handle:
+ * it keeps reading the file it opened. The library installs a SIGBUS
+ * handler for this on the first open, in front of the process's own:
+ * faults outside the library's maps still reach the handler that was
+ * there before (a handler installed after the first open must pass
+ * SIGBUS on to the one it replaced, or truncations kill the process).
+ *
  * # Safety
  * `path` is NULL or a NUL-terminated string; `out` is NULL or valid for
  * writing one pointer.
@@ -577,7 +592,9 @@ enum BrdfAtlasStatus brdf_atlas_model_reconstruct_with(const struct BrdfAtlasMod
  * number of doubles written.
  *
  * Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (x or y NaN or infinite),
- * UNSUPPORTED (the model is not 2-D), BUFFER_TOO_SMALL (len < 3 * bins).
+ * UNSUPPORTED (the model is not 2-D), BUFFER_TOO_SMALL (len < 3 * bins),
+ * BAD_FILE (the store changed on disk while the model was open; see
+ * `brdf_atlas_model_open`).
  *
  * # Safety
  * `model` is NULL or a live handle; `buf` is NULL or valid for writing

@@ -1,6 +1,7 @@
 //! Progress bars on stderr. indicatif draws nothing when stderr is not a
 //! terminal, so scripts and tests see only the report and the errors.
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, PoisonError};
 use std::time::Duration;
 
@@ -88,6 +89,40 @@ pub fn spinner(message: impl Into<String>) -> ProgressBar {
 /// something is happening (a fit first opens every input file).
 pub struct Bars {
     current: std::sync::Mutex<ProgressBar>,
+    stop: StopIn,
+}
+
+/// For the tests of files changed during a run: with
+/// `BRDF_ATLAS_TEST_STOP_IN=PHASE` in its environment (a label of the core
+/// library: `store`, `optimise`, ...) the process stops itself with SIGSTOP
+/// at the first step of that phase, once, so that a test can change an
+/// input at a known point of the work and then continue it with SIGCONT.
+struct StopIn {
+    phase: Option<String>,
+    armed: AtomicBool,
+    done: AtomicBool,
+}
+
+impl StopIn {
+    fn from_env() -> StopIn {
+        StopIn {
+            phase: std::env::var("BRDF_ATLAS_TEST_STOP_IN").ok(),
+            armed: AtomicBool::new(false),
+            done: AtomicBool::new(false),
+        }
+    }
+
+    fn start(&self, label: &str) {
+        let armed = self.phase.as_deref() == Some(label);
+        self.armed.store(armed, Ordering::SeqCst);
+    }
+
+    fn step(&self) {
+        if self.armed.load(Ordering::SeqCst) && !self.done.swap(true, Ordering::SeqCst) {
+            // SAFETY: raise has no memory-safety preconditions.
+            unsafe { libc::raise(libc::SIGSTOP) };
+        }
+    }
 }
 
 impl Bars {
@@ -95,6 +130,7 @@ impl Bars {
     pub fn new(waiting: impl Into<String>) -> Bars {
         Bars {
             current: std::sync::Mutex::new(spinner(waiting)),
+            stop: StopIn::from_env(),
         }
     }
 
@@ -134,6 +170,7 @@ fn phase_message(label: &str) -> &'static str {
 
 impl brdf_atlas_core::Progress for Bars {
     fn start(&self, label: &str, total: u64) {
+        self.stop.start(label);
         self.with_bar(|pb| {
             pb.finish_and_clear();
             *pb = phase_bar(total, phase_message(label));
@@ -141,6 +178,7 @@ impl brdf_atlas_core::Progress for Bars {
     }
 
     fn advance(&self, delta: u64) {
+        self.stop.step();
         self.with_bar(|pb| pb.inc(delta));
     }
 

@@ -3,6 +3,9 @@
 // for the reconstruction off the GUI thread, and check the table against
 // the C library called directly (bit for bit), then save it and compare
 // with the library's own writer byte for byte. Grabs the widget to a PNG.
+// Last, a second panel on a copy of the model whose store is rewritten in
+// place while it is open: Validate and the map show the library's message,
+// the last reconstruction stays usable, and reopening the model recovers.
 //
 // Environment: BRDF_ATLAS_TEST_MODEL (a 2-D model file, required),
 // BRDF_ATLAS_ARTEFACTS (directory for the screenshot; default ".").
@@ -46,6 +49,28 @@ QByteArray readAll(const QString &path) {
     QFile f(path);
     if (!f.open(QIODevice::ReadOnly)) qFatal("cannot read %s", qPrintable(path));
     return f.readAll();
+}
+
+// Rewrite `path` in place (the same file truncated, then written), as `cp`
+// or a shell redirection over it does.
+void rewriteInPlace(const QString &path, const QByteArray &bytes) {
+    QFile f(path);
+    if (!f.open(QIODevice::WriteOnly | QIODevice::Truncate) || f.write(bytes) != bytes.size())
+        qFatal("cannot rewrite %s", qPrintable(path));
+}
+
+// Click the view half-way between its first two materials and press
+// Validate; wait for the outcome. Returns the failure message, or empty.
+QString validateBetweenMaterials(AtlasPanel *panel) {
+    AtlasMapView *view = panel->mapView();
+    const QPointF mid = (view->materialPoints()[0] + view->materialPoints()[1]) / 2;
+    QTest::mouseClick(view, Qt::LeftButton, Qt::NoModifier, view->latentToWidget(mid).toPoint());
+    QSignalSpy done(panel, &AtlasPanel::reconstructed);
+    QSignalSpy failed(panel, &AtlasPanel::failed);
+    QTest::mouseClick(panel->validateButton(), Qt::LeftButton);
+    if (!QTest::qWaitFor([&] { return done.count() + failed.count() > 0; }, 120000))
+        qFatal("no outcome from Validate");
+    return failed.isEmpty() ? QString() : failed.first().first().toString();
 }
 
 }  // namespace
@@ -229,6 +254,67 @@ private slots:
         QVERIFY(!panel_->saveTo(dir.filePath("missing/x.binary")));
         QCOMPARE(failed.count(), 1);
         QVERIFY(failed.first().first().toString().contains("missing/x.binary"));
+    }
+
+    void storeRewrittenWhileOpenIsShownAndRecovered() {
+        // A copy of the model, so that the first panel's stays as it is.
+        QTemporaryDir dir;
+        QVERIFY(dir.isValid());
+        const QString model = dir.filePath(QFileInfo(modelPath_).fileName());
+        const QString store = model + QStringLiteral(".store");
+        QVERIFY(QFile::copy(modelPath_, model));
+        QVERIFY(QFile::copy(modelPath_ + QStringLiteral(".store"), store));
+        const QByteArray original = readAll(store);
+
+        AtlasPanel panel;
+        panel.resize(360, 460);
+        panel.show();
+        QVERIFY(QTest::qWaitForWindowExposed(&panel));
+        QSignalSpy opened(&panel, &AtlasPanel::modelOpened);
+        panel.openModel(model);
+        QTRY_VERIFY_WITH_TIMEOUT(opened.count() == 1 && !panel.busy(), 60000);
+        QTRY_VERIFY_WITH_TIMEOUT(!panel.mapView()->mapPending() && !panel.mapView()->mapImage().isNull(), 60000);
+        QString error = validateBetweenMaterials(&panel);
+        QVERIFY2(error.isEmpty(), qPrintable(error));
+        const AtlasReconstruction before = panel.lastReconstruction();
+        QVERIFY(before.table);
+        const std::vector<double> kept = *before.table;
+
+        // Rewritten shorter, in place, while the model is open.
+        rewriteInPlace(store, original.left(original.size() / 2));
+        error = validateBetweenMaterials(&panel);
+        QVERIFY2(error.contains(QStringLiteral("changed on disk while open")) &&
+                     error.contains(QFileInfo(store).fileName()),
+                 qPrintable(error));
+        // The panel shows it, and stays usable.
+        QCOMPARE(panel.statusLabel()->text(), error);
+        QVERIFY(!panel.busy());
+        QVERIFY(panel.validateButton()->isEnabled());
+        // The map of a new window says the same, on the map.
+        QSignalSpy mapReady(panel.mapView(), &AtlasMapView::mapReady);
+        const QPointF at(panel.mapView()->width() / 2.0, panel.mapView()->height() / 2.0);
+        QWheelEvent wheel(at, panel.mapView()->mapToGlobal(at.toPoint()), QPoint(), QPoint(0, 120),
+                          Qt::NoButton, Qt::NoModifier, Qt::NoScrollPhase, false);
+        QApplication::sendEvent(panel.mapView(), &wheel);
+        QTRY_VERIFY_WITH_TIMEOUT(!mapReady.isEmpty() && !panel.mapView()->mapPending(), 60000);
+        QVERIFY2(mapReady.last().first().toString().contains(QStringLiteral("changed on disk while open")),
+                 qPrintable(mapReady.last().first().toString()));
+        // What was reconstructed before is untouched and still saves.
+        QCOMPARE(*panel.lastReconstruction().table, kept);
+        QVERIFY(panel.saveTo(dir.filePath(QStringLiteral("kept.binary"))));
+        QCOMPARE(readAll(dir.filePath(QStringLiteral("kept.binary"))).size(),
+                 int(12 + kept.size() * sizeof(double)));
+        // The first panel, on its own model, still answers.
+        QCOMPARE(validateBetweenMaterials(panel_), QString());
+
+        // The store restored and the model reopened: Validate works again.
+        rewriteInPlace(store, original);
+        panel.openModel(model);
+        QTRY_VERIFY_WITH_TIMEOUT(opened.count() == 2 && !panel.busy(), 60000);
+        error = validateBetweenMaterials(&panel);
+        QVERIFY2(error.isEmpty(), qPrintable(error));
+        const AtlasReconstruction &after = panel.lastReconstruction();
+        QVERIFY(*after.table == referenceTable(model, after.x, after.y));
     }
 };
 

@@ -97,6 +97,7 @@ pub fn run(args: &Args) -> Result<ExitCode, Error> {
         .map(|(wi, wo)| (wi.direction(), wo.direction()))
         .collect();
     let values = blend.eval_batch(&directions);
+    model.verify()?;
     let mut out = io::stdout().lock();
     writeln!(
         out,
@@ -129,7 +130,7 @@ pub fn run(args: &Args) -> Result<ExitCode, Error> {
         args.target.blend.name()
     )?;
     if args.plausibility {
-        let p = blend.plausibility();
+        let p = blend.plausibility()?;
         writeln!(
             out,
             "plausibility: the clamp removes {:.4}% of the cosine-weighted reflectance ({:.4}% of the values); \

@@ -54,7 +54,7 @@ pub fn write(
 ) -> Result<(), Error> {
     let t0 = Instant::now();
     let blend = model.at_with(x, rule)?;
-    let table = blend.table();
+    let table = blend.table()?;
     table.write(out)?;
     let elapsed = t0.elapsed();
     let weights = blend.weights();
@@ -73,7 +73,7 @@ pub fn write(
         weights.len(),
         weights.iter().sum::<f64>()
     )?;
-    let plausibility = blend.plausibility();
+    let plausibility = blend.plausibility()?;
     let confidence = blend.confidence();
     writeln!(
         report,
@@ -139,7 +139,11 @@ pub fn warn(model: &Model, x: &[f64], blend: &Blend<'_>) -> Result<(), Error> {
 }
 
 /// The JSON record of a blend: point, weights by name, transform, plausibility, confidence.
-pub fn record(model: &Model, rule: BlendRule, blend: &Blend<'_>) -> serde_json::Value {
+pub fn record(
+    model: &Model,
+    rule: BlendRule,
+    blend: &Blend<'_>,
+) -> Result<serde_json::Value, Error> {
     let weights: serde_json::Map<String, serde_json::Value> = model
         .names()
         .iter()
@@ -147,8 +151,8 @@ pub fn record(model: &Model, rule: BlendRule, blend: &Blend<'_>) -> serde_json::
         .map(|(n, w)| (n.clone(), json!(w)))
         .collect();
     let transform = model.file().transform;
-    let (p, c) = (blend.plausibility(), blend.confidence());
-    json!({
+    let (p, c) = (blend.plausibility()?, blend.confidence());
+    Ok(json!({
         "model": model.path().display().to_string(),
         "point": blend.point(),
         "blend": rule.name(),
@@ -159,7 +163,7 @@ pub fn record(model: &Model, rule: BlendRule, blend: &Blend<'_>) -> serde_json::
         "plausible": p.is_plausible(),
         "confidence": c,
         "low_confidence": c.is_low(),
-    })
+    }))
 }
 
 /// Run `reconstruct`.
@@ -167,8 +171,8 @@ pub fn run(args: &Args) -> Result<ExitCode, Error> {
     let (model, x) = args.target.open()?;
     if args.json {
         let blend = model.at_with(x, args.target.blend)?;
-        blend.table().write(&args.out)?;
-        let mut rec = record(&model, args.target.blend, &blend);
+        blend.table()?.write(&args.out)?;
+        let mut rec = record(&model, args.target.blend, &blend)?;
         rec["output"] = json!(args.out.display().to_string());
         warn(&model, x, &blend)?;
         writeln!(io::stdout().lock(), "{rec}")?;

@@ -49,7 +49,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let (mut refl, mut vals, mut alb, mut low) = (vec![], vec![], vec![], 0);
         for x in &xs {
             let blend = model.at_with(x, rule)?;
-            let p = blend.plausibility();
+            let p = blend.plausibility()?;
             refl.push(p.clamped_reflectance);
             vals.push(p.clamped_values);
             alb.push(p.max_albedo);

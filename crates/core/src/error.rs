@@ -43,6 +43,13 @@ pub enum CoreError {
         /// What was expected and what was found.
         why: String,
     },
+    /// A mapped file (a model's store) was truncated or rewritten in place
+    /// by another program while open: nothing read from it is returned.
+    #[error("{}: changed on disk while open (truncated or rewritten in place by another program); reopen the model to use the file as it is now", path.display())]
+    FileChanged {
+        /// The file.
+        path: PathBuf,
+    },
     /// Writing an output file, or putting it in place, failed.
     #[error("{}: {source}", path.display())]
     Write {

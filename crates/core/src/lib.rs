@@ -23,7 +23,7 @@
 //!
 //! let model = Model::open("atlas.model")?;
 //! let material = model.at(&[0.3, -0.5])?;
-//! let table = material.table();
+//! let table = material.table()?;
 //! let map = model.albedo_map(256, 256, View::default(), None, &brdf_atlas_core::NoProgress)?;
 //! # let _ = (table, map);
 //! # Ok::<(), brdf_atlas_core::CoreError>(())

@@ -56,7 +56,7 @@ fn full_table_equals_the_dense_weighted_sum() {
         let m = Model::open(fit(tmp.path(), transform, Precision::F64)).unwrap();
         let x = [0.31, -0.42];
         let w = dense_weights(&m, &x);
-        let table = m.at(&x).unwrap().table();
+        let table = m.at(&x).unwrap().table().unwrap();
         let t = transform.build(DIMS);
         let bins = DIMS.bins();
         for row in 0..DIMS.values() {
@@ -114,7 +114,7 @@ fn point_queries_equal_the_full_table() {
     for precision in [Precision::F32, Precision::F64] {
         let m = Model::open(fit(tmp.path(), TransformKind::Log, precision)).unwrap();
         let b = m.at(&[-0.2, 0.7]).unwrap();
-        let table = b.table();
+        let table = b.table().unwrap();
         for bin in (0..DIMS.bins()).step_by(7) {
             let from_table = table
                 .value(0, bin)
@@ -208,7 +208,12 @@ fn written_reconstruction_reads_back_with_the_merl_reader() {
     let tmp = tempfile::tempdir().unwrap();
     let m = Model::open(fit(tmp.path(), TransformKind::Raw, Precision::F32)).unwrap();
     let out = tmp.path().join("new.binary");
-    m.at(&[0.9, 0.9]).unwrap().table().write(&out).unwrap();
+    m.at(&[0.9, 0.9])
+        .unwrap()
+        .table()
+        .unwrap()
+        .write(&out)
+        .unwrap();
     let f = MerlFile::open(&out).unwrap();
     assert_eq!(f.dims(), DIMS);
     let t = f.to_table();

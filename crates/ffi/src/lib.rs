@@ -22,6 +22,11 @@
 //!   memory that is not there: every pointer is checked for NULL and
 //!   alignment, every length and coordinate is checked, and every entry
 //!   point catches panics (`BRDF_ATLAS_STATUS_PANIC`).
+//! - **Files changed while open** do not crash the host either: a store
+//!   truncated or rewritten in place under an open handle makes the call
+//!   that reads it, and every later call on that handle, return
+//!   `BRDF_ATLAS_STATUS_BAD_FILE` ("... changed on disk while open ...")
+//!   until the model is reopened (`brdf_atlas_model_open`).
 //!
 //! ```
 //! use std::ffi::CStr;

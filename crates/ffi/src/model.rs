@@ -29,7 +29,10 @@ const _: () = {
 /// `p` is NULL or a handle from `brdf_atlas_model_open` not yet freed.
 pub(crate) unsafe fn borrow<'a>(p: *const BrdfAtlasModel) -> Result<&'a Model> {
     // SAFETY: the caller promises a live handle.
-    unsafe { check::borrowed(p, "model") }.map(|h| &h.model)
+    let model = unsafe { check::borrowed(p, "model") }.map(|h| &h.model)?;
+    // A handle whose store was seen to change refuses every call.
+    model.store().verify_cheap()?;
+    Ok(model)
 }
 
 /// A window of the latent plane: x in [x0, x1], y in [y0, y1], y up.
@@ -92,6 +95,19 @@ pub struct BrdfAtlasDims {
 /// Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (path empty or not UTF-8),
 /// IO (missing or unreadable file or store), BAD_FILE (not a model, another
 /// version, store changed), NOT_POSITIVE_DEFINITE.
+///
+/// The store stays memory-mapped while the handle lives. If another
+/// program truncates it or rewrites it in place meanwhile (`cp` or a shell
+/// redirection over it), the process does not die: the call that reads the
+/// store returns BAD_FILE with a message naming the store and saying it
+/// changed on disk while open, and so does every later call on this
+/// handle until it is freed and the model reopened. Replacing the store by
+/// a rename (as `brdf-atlas fit` does) changes nothing for an open handle:
+/// it keeps reading the file it opened. The library installs a SIGBUS
+/// handler for this on the first open, in front of the process's own:
+/// faults outside the library's maps still reach the handler that was
+/// there before (a handler installed after the first open must pass
+/// SIGBUS on to the one it replaced, or truncations kill the process).
 ///
 /// # Safety
 /// `path` is NULL or a NUL-terminated string; `out` is NULL or valid for

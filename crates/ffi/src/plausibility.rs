@@ -75,7 +75,7 @@ pub unsafe extern "C" fn brdf_atlas_model_plausibility(
         let out = unsafe { check::out(out, "out") }?;
         let p = check::point(m, x, y)?;
         let b = m.at_with(&p, rule(blend)?)?;
-        let (pl, c) = (b.plausibility(), b.confidence());
+        let (pl, c) = (b.plausibility()?, b.confidence());
         *out = BrdfAtlasPlausibility {
             clamped_reflectance: pl.clamped_reflectance,
             clamped_values: pl.clamped_values,
@@ -153,7 +153,7 @@ pub unsafe extern "C" fn brdf_atlas_model_reconstruct_with(
         let p = check::point(m, x, y)?;
         let out = unsafe { check::buffer(buf, len, m.dims().values(), "buf") }?;
         let written = unsafe { check::optional_out(written, "written") }?;
-        let table = m.at_with(&p, rule(blend)?)?.table();
+        let table = m.at_with(&p, rule(blend)?)?.table()?;
         out.copy_from_slice(table.raw());
         if let Some(w) = written {
             *w = out.len();

@@ -44,7 +44,9 @@ pub struct BrdfAtlasLocation {
 /// number of doubles written.
 ///
 /// Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (x or y NaN or infinite),
-/// UNSUPPORTED (the model is not 2-D), BUFFER_TOO_SMALL (len < 3 * bins).
+/// UNSUPPORTED (the model is not 2-D), BUFFER_TOO_SMALL (len < 3 * bins),
+/// BAD_FILE (the store changed on disk while the model was open; see
+/// `brdf_atlas_model_open`).
 ///
 /// # Safety
 /// `model` is NULL or a live handle; `buf` is NULL or valid for writing
@@ -63,7 +65,7 @@ pub unsafe extern "C" fn brdf_atlas_model_reconstruct(
         let p = check::point(m, x, y)?;
         let out = unsafe { check::buffer(buf, len, m.dims().values(), "buf") }?;
         let written = unsafe { check::optional_out(written, "written") }?;
-        let table = m.at(&p)?.table();
+        let table = m.at(&p)?.table()?;
         out.copy_from_slice(table.raw());
         if let Some(w) = written {
             *w = out.len();
@@ -96,7 +98,7 @@ pub unsafe extern "C" fn brdf_atlas_model_reconstruct_to_file(
         let m = unsafe { handle::borrow(model) }?;
         let path = unsafe { check::path(path, "path") }?;
         let p = check::point(m, x, y)?;
-        m.at(&p)?.table().write(path)?;
+        m.at(&p)?.table()?.write(path)?;
         Ok(())
     })
 }
@@ -142,7 +144,9 @@ pub unsafe extern "C" fn brdf_atlas_model_eval(
         let out = unsafe { check::buffer(rgb, 3, 3, "rgb") }?;
         let p = check::point(m, x, y)?;
         let blend = m.at(&p)?;
-        out.copy_from_slice(&eval_one(&blend, wi, wo));
+        let rgb = eval_one(&blend, wi, wo);
+        m.verify()?;
+        out.copy_from_slice(&rgb);
         Ok(())
     })
 }
@@ -198,6 +202,7 @@ pub unsafe extern "C" fn brdf_atlas_model_eval_batch(
         for (a, b) in wi.chunks_exact(3).zip(wo.chunks_exact(3)) {
             result.extend_from_slice(&eval_one(&blend, a, b));
         }
+        m.verify()?;
         out.copy_from_slice(&result);
         Ok(())
     })

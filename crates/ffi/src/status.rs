@@ -34,7 +34,9 @@ pub enum BrdfAtlasStatus {
     /// permission, disk full).
     Io = 5,
     /// A model or store file is malformed, of another version, or changed
-    /// since the fit.
+    /// since the fit; or a store or MERL file changed on disk while the
+    /// library had it open (the handle then refuses every call until
+    /// reopened).
     BadFile = 6,
     /// A MERL file is malformed (header, size, non-finite values).
     BadMerl = 7,
@@ -110,6 +112,7 @@ impl From<MerlError> for Failure {
     fn from(e: MerlError) -> Failure {
         let status = match e {
             MerlError::Io { .. } => BrdfAtlasStatus::Io,
+            MerlError::Changed { .. } => BrdfAtlasStatus::BadFile,
             MerlError::BufferLength { .. } | MerlError::InvalidDims { .. } => {
                 BrdfAtlasStatus::InvalidArgument
             }
@@ -124,7 +127,7 @@ impl From<CoreError> for Failure {
         let status = match e {
             CoreError::Merl(e) => return e.into(),
             CoreError::Io { .. } | CoreError::Write { .. } => BrdfAtlasStatus::Io,
-            CoreError::BadFile { .. } => BrdfAtlasStatus::BadFile,
+            CoreError::BadFile { .. } | CoreError::FileChanged { .. } => BrdfAtlasStatus::BadFile,
             CoreError::EmptyDataset { .. } | CoreError::DimsDiffer { .. } => {
                 BrdfAtlasStatus::BadMerl
             }

@@ -152,12 +152,12 @@ fn build_fixture() -> Fixture {
     }
     for (k, p) in POINTS.iter().enumerate() {
         let file = dir.join(format!("point{k}.binary"));
-        m.at(p).unwrap().table().write(&file).unwrap();
+        m.at(p).unwrap().table().unwrap().write(&file).unwrap();
         line(&mut e, "point", p, Some(&file));
     }
     let far = [1e6, -1e300];
     let file = dir.join("far.binary");
-    m.at(&far).unwrap().table().write(&file).unwrap();
+    m.at(&far).unwrap().table().unwrap().write(&file).unwrap();
     line(&mut e, "far", &far, Some(&file));
     let blend = m.at(&POINTS[0]).unwrap();
     line(&mut e, "weights", blend.weights(), None);
@@ -366,7 +366,12 @@ fn readme_example_writes_the_reconstruction() {
     assert!(stdout.contains("wrote"), "{stdout}");
     let m = Model::open(&f.model).unwrap();
     let want = f.dir.join("out/readme-rust.binary");
-    m.at(&[x, y]).unwrap().table().write(&want).unwrap();
+    m.at(&[x, y])
+        .unwrap()
+        .table()
+        .unwrap()
+        .write(&want)
+        .unwrap();
     assert_eq!(
         std::fs::read(&out_file).unwrap(),
         std::fs::read(&want).unwrap(),

@@ -84,6 +84,13 @@ pub enum MerlError {
         /// The offending value.
         value: f64,
     },
+    /// The file was truncated or rewritten by another program while it was
+    /// mapped: what was read from it cannot be trusted.
+    #[error("{}: changed while being read (truncated or rewritten by another program); nothing read from it was used", path.display())]
+    Changed {
+        /// The file.
+        path: PathBuf,
+    },
     /// A table was built from a buffer whose length disagrees with its dims.
     #[error("{what}: {actual} values given, {dims} needs {expected}")]
     BufferLength {

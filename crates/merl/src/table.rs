@@ -9,7 +9,7 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use memmap2::Mmap;
+use brdf_mapguard::{GuardedMap, Watch};
 
 use crate::angles::{Dims, MAX_DIM, Vec3};
 use crate::error::{MerlError, Result};
@@ -59,10 +59,15 @@ pub fn is_invalid(raw: f64) -> bool {
 }
 
 /// A validated MERL file, memory-mapped: nothing is copied until asked.
+///
+/// If another program truncates or rewrites the file while it is mapped,
+/// reads return zeros instead of killing the process, and
+/// [`MerlFile::verify`] reports the change: a reader checks it before it
+/// trusts what it read.
 pub struct MerlFile {
     path: PathBuf,
     dims: Dims,
-    map: Mmap,
+    map: GuardedMap,
     invalid: std::sync::OnceLock<[usize; 3]>,
 }
 
@@ -79,18 +84,19 @@ impl MerlFile {
     /// Map and validate a MERL file: header, size, finite values.
     pub fn open(path: impl AsRef<Path>) -> Result<MerlFile> {
         let path = path.as_ref().to_path_buf();
-        let file = std::fs::File::open(&path).map_err(|e| MerlError::io(&path, e))?;
-        // SAFETY: the map is read-only; if another process truncates the file
-        // under us the OS may signal, which no safe reader can prevent.
-        let map = unsafe { Mmap::map(&file) }.map_err(|e| MerlError::io(&path, e))?;
+        let map = GuardedMap::open(&path, Watch::Path).map_err(|e| MerlError::io(&path, e))?;
         let dims = check_header(&path, &map, map.len() as u64)?;
-        let invalid = scan_values(&path, &map[HEADER_BYTES..])?;
-        Ok(MerlFile {
+        let scanned = scan_values(&path, &map[HEADER_BYTES..]);
+        let file = MerlFile {
             path,
             dims,
             map,
-            invalid: invalid.into(),
-        })
+            invalid: std::sync::OnceLock::new(),
+        };
+        // A value error read from a file that changed meanwhile is the change.
+        file.verify()?;
+        let _ = file.invalid.set(scanned?);
+        Ok(file)
     }
 
     /// Map a MERL file and check its header and size only: for a reader that
@@ -99,16 +105,29 @@ impl MerlFile {
     /// pass over the data.
     pub fn map(path: impl AsRef<Path>) -> Result<MerlFile> {
         let path = path.as_ref().to_path_buf();
-        let file = std::fs::File::open(&path).map_err(|e| MerlError::io(&path, e))?;
-        // SAFETY: as in `open`.
-        let map = unsafe { Mmap::map(&file) }.map_err(|e| MerlError::io(&path, e))?;
+        let map = GuardedMap::open(&path, Watch::Path).map_err(|e| MerlError::io(&path, e))?;
         let dims = check_header(&path, &map, map.len() as u64)?;
-        Ok(MerlFile {
+        let file = MerlFile {
             path,
             dims,
             map,
             invalid: std::sync::OnceLock::new(),
-        })
+        };
+        file.verify()?;
+        Ok(file)
+    }
+
+    /// `Ok` if the file is as it was when mapped; otherwise the error
+    /// saying it changed while being read (truncated, so that reads past
+    /// its new end gave zeros, or rewritten in place). Once changed,
+    /// always changed. One `stat` of the path.
+    pub fn verify(&self) -> Result<()> {
+        if self.map.changed() {
+            return Err(MerlError::Changed {
+                path: self.path.clone(),
+            });
+        }
+        Ok(())
     }
 
     /// Check that raw values `start .. start + values.len()` (as read by

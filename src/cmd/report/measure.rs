@@ -404,8 +404,8 @@ fn probe_points(model: &Model, count: usize) -> Vec<Vec<f64>> {
 /// Full reconstructions from the f32 and the f64 store at the same points.
 fn compare_precision(m32: &Model, m64: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error> {
     for x in probe_points(m32, plan.points) {
-        let (a, time32) = timed(plan.repeat, || Ok(m32.at(&x)?.table()))?;
-        let (b, time64) = timed(plan.repeat, || Ok(m64.at(&x)?.table()))?;
+        let (a, time32) = timed(plan.repeat, || Ok(m32.at(&x)?.table()?))?;
+        let (b, time64) = timed(plan.repeat, || Ok(m64.at(&x)?.table()?))?;
         let dims = a.dims();
         let (mut max_abs, mut peak, mut sum2, mut count) = (0.0f64, 0.0f64, 0.0f64, 0usize);
         for c in 0..3 {

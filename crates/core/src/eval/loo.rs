@@ -205,6 +205,7 @@ pub fn evaluate(
             log: el[m * n..(m + 1) * n].to_vec(),
         })
         .collect();
+    store.verify()?;
     Ok(Evaluation {
         errors,
         scored_rows: scored,

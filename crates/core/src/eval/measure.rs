@@ -12,7 +12,9 @@ use crate::query::map::AlbedoMap;
 /// bin it names (unmeasured bins count as 0). Slow: one full reconstruction.
 pub fn reference_albedo(model: &Model, x: &[f64], rule: &Quadrature) -> Result<[f64; 3]> {
     let blend = model.at(x)?;
-    Ok(rule.integrate(|bin| [0, 1, 2].map(|c| blend.value(c, bin).unwrap_or(0.0))))
+    let albedo = rule.integrate(|bin| [0, 1, 2].map(|c| blend.value(c, bin).unwrap_or(0.0)));
+    model.verify()?;
+    Ok(albedo)
 }
 
 /// Largest and mean error of `map` at `pixels` (`(px, py)`) against

@@ -80,7 +80,19 @@ impl Model {
                 path.display()
             )));
         }
+        // Changed while being checksummed: say so, not "checksum differs".
+        store.verify()?;
         Model::assemble(path, file, store)
+    }
+
+    /// `Ok` while the store is as it was when opened; otherwise
+    /// [`CoreError::FileChanged`] naming it, for this and every later call
+    /// (reopen the model). Every query that reads the store calls this
+    /// before it returns; a caller of the infallible point queries
+    /// ([`Blend::value`](crate::Blend::value), [`Blend::eval`](crate::Blend::eval),
+    /// ...) calls it after them, before it uses their answers. One `fstat`.
+    pub fn verify(&self) -> Result<()> {
+        self.store.verify()
     }
 
     /// A model from a model file's content and its store, held in memory:
@@ -363,7 +375,10 @@ mod tests {
         assert_eq!(memory.path(), tmp.path().join("unsaved.atlas"));
         for x in [[0.1, -0.3], [0.9, 0.9], [-2.0, 0.5]] {
             assert_eq!(disk.weights_at(&x).unwrap(), memory.weights_at(&x).unwrap());
-            let (a, b) = (disk.at(&x).unwrap().table(), memory.at(&x).unwrap().table());
+            let (a, b) = (
+                disk.at(&x).unwrap().table().unwrap(),
+                memory.at(&x).unwrap().table().unwrap(),
+            );
             assert_eq!(a.raw(), b.raw());
         }
         // A store that does not hold what the file describes is refused.

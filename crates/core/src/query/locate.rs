@@ -41,6 +41,7 @@ impl Model {
             )));
         }
         let store = self.store();
+        store.verify_cheap()?;
         let (n, bins, rows) = (store.n(), dims.bins(), store.rows());
         let mean = store.mean();
         // b = Z z and |z|^2, in fixed chunks folded in order.
@@ -135,6 +136,8 @@ impl Model {
             })
             .collect();
         nearest.sort_by(|a, b| a.1.total_cmp(&b.1));
+        file.verify()?;
+        self.verify()?;
         Ok(Located {
             point,
             rmse: (best.0.max(0.0) / d).sqrt(),

@@ -239,6 +239,7 @@ impl Model {
             )));
         }
         view.check()?;
+        self.store().verify_cheap()?;
         let kernel = self.file().kernel;
         let latent = self.latent();
         let n = latent.nrows();
@@ -365,6 +366,7 @@ impl Model {
             }
         };
         progress.finish();
+        self.verify()?;
         Ok(AlbedoMap {
             width,
             height,

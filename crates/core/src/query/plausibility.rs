@@ -125,7 +125,7 @@ impl Model {
                     return Ok(blend);
                 }
                 let convex: Vec<f64> = blend.kernel().iter().map(|k| k / sum).collect();
-                let t = self.plausible_step(blend.weights(), &convex);
+                let t = self.plausible_step(blend.weights(), &convex)?;
                 if t == 0.0 {
                     return Ok(blend);
                 }
@@ -142,7 +142,7 @@ impl Model {
 
     /// The step of [`BlendRule::Plausible`] from weights `w` towards `v`:
     /// one pass over the store (see [`crate::loo::STEPS`]).
-    fn plausible_step(&self, w: &[f64], v: &[f64]) -> f64 {
+    fn plausible_step(&self, w: &[f64], v: &[f64]) -> Result<f64> {
         let store = self.store();
         let rows = store.rows();
         let bins = self.dims().bins();
@@ -172,7 +172,8 @@ impl Model {
         for p in &parts {
             budget.merge(p);
         }
-        budget.steps()[0]
+        self.verify()?;
+        Ok(budget.steps()[0])
     }
 }
 
@@ -193,8 +194,11 @@ impl Blend<'_> {
 
     /// How physical this material is: one pass over the store for the clamp
     /// figures, and point queries at the bins of the directional-albedo rule.
-    pub fn plausibility(&self) -> Plausibility {
+    /// [`CoreError::FileChanged`](crate::CoreError::FileChanged) if the
+    /// store changed under the pass.
+    pub fn plausibility(&self) -> Result<Plausibility> {
         let model = self.model();
+        model.store().verify_cheap()?;
         let store = model.store();
         let (rows, bins) = (store.rows(), model.dims().bins());
         let unmeasured = store.unmeasured();
@@ -238,11 +242,12 @@ impl Blend<'_> {
         let rule = model.directional_rule();
         let (max_albedo, max_albedo_incidence) =
             largest(&rule.integrate(|b| self.rgb(b).unwrap_or([0.0; 3])));
-        Plausibility {
+        model.verify()?;
+        Ok(Plausibility {
             clamped_reflectance: share(sum[0], sum[1]),
             clamped_values: share(sum[2], sum[3]),
             max_albedo,
             max_albedo_incidence,
-        }
+        })
     }
 }

@@ -14,6 +14,12 @@
 //!
 //! Outputs are reflectance clamped to `>= 0` (a weighted sum of BRDFs can go
 //! negative); bins that no input material measured keep MERL's invalid marker.
+//!
+//! If the store changes on disk while the model is open, [`Blend::table`]
+//! returns [`CoreError::FileChanged`](crate::CoreError::FileChanged); the
+//! point queries, which return plain values, then give numbers of no
+//! meaning (never a crash), and [`Model::verify`] says so: check it before
+//! using their answers.
 
 use std::sync::OnceLock;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -74,7 +80,10 @@ const TABLE_CHUNK: usize = 4096;
 
 impl Model {
     /// The blend at latent point `x` (`q` finite coordinates).
+    /// [`CoreError::FileChanged`](crate::CoreError::FileChanged) once the
+    /// store is known to have changed (a model refuses every query then).
     pub fn at(&self, x: &[f64]) -> Result<Blend<'_>> {
+        self.store().verify_cheap()?;
         let (kernel, weights) = self.kernel_and_weights_at(x)?;
         Ok(Blend {
             model: self,
@@ -212,7 +221,10 @@ impl<'m> Blend<'m> {
     }
 
     /// The whole table in MERL raw units: one parallel pass over the store.
-    pub fn table(&self) -> MerlTable {
+    /// [`CoreError::FileChanged`](crate::CoreError::FileChanged) if the
+    /// store changed on disk since the model was opened.
+    pub fn table(&self) -> Result<MerlTable> {
+        self.model.store().verify_cheap()?;
         let dims = self.model.dims();
         let bins = dims.bins();
         let store = self.model.store();
@@ -247,6 +259,7 @@ impl<'m> Blend<'m> {
                     }
                 },
             );
-        MerlTable::from_raw(dims, values).expect("length matches dims")
+        self.model.verify()?;
+        Ok(MerlTable::from_raw(dims, values).expect("length matches dims"))
     }
 }

@@ -354,6 +354,12 @@ pub fn build_store(
         },
     );
     progress.finish();
+    // An input truncated or rewritten during the pass (its reads gave
+    // zeros, or a mix of old and new values) is the error, before anything
+    // read from it.
+    for f in &data.files {
+        f.verify()?;
+    }
     if let Some((_, e)) = bad_value.into_inner().expect("no panics while locked") {
         return Err(e);
     }

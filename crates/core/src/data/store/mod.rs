@@ -23,12 +23,17 @@
 //! ..     zero padding to a multiple of 64
 //! ..     Z: d rows of N values (f32 or f64)
 //! ```
+//!
+//! The map is guarded ([`brdf_mapguard`]): if another program truncates or
+//! rewrites the file while it is mapped, reads give zeros instead of
+//! killing the process, and [`Store::verify`] reports the change. Every
+//! operation that reads the store checks it before it returns a result.
 
 use std::path::{Path, PathBuf};
 
+use brdf_mapguard::{GuardedMap, Watch};
 use brdf_merl::Dims;
 use faer::Mat;
-use memmap2::Mmap;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -141,7 +146,7 @@ impl Layout {
 /// A memory-mapped store (see the module docs). Cheap to share by reference.
 pub struct Store {
     path: PathBuf,
-    map: Mmap,
+    map: GuardedMap,
     dims: Dims,
     transform: TransformKind,
     precision: Precision,
@@ -173,9 +178,8 @@ impl Store {
     /// Map a store file and check its header and size.
     pub fn open(path: impl AsRef<Path>) -> Result<Store> {
         let path = path.as_ref().to_path_buf();
-        let file = std::fs::File::open(&path).map_err(|e| CoreError::io(&path, e))?;
-        // SAFETY: read-only map of a file we do not modify; see MerlFile::open.
-        let map = unsafe { Mmap::map(&file) }.map_err(|e| CoreError::io(&path, e))?;
+        let map =
+            GuardedMap::open(&path, Watch::Descriptor).map_err(|e| CoreError::io(&path, e))?;
         let bad = |why: String| CoreError::bad_file(&path, why);
         if brdf_merl::table::is_lfs_pointer(&map) {
             return Err(bad(
@@ -245,6 +249,30 @@ impl Store {
         &self.path
     }
 
+    /// `Ok` if the file is as it was when mapped; otherwise
+    /// [`CoreError::FileChanged`]: it was truncated (reads of it gave zeros)
+    /// or rewritten in place (its size or modification time moved). Once
+    /// changed, always changed: the store must be reopened. One `fstat`.
+    pub fn verify(&self) -> Result<()> {
+        if self.map.changed() {
+            return Err(CoreError::FileChanged {
+                path: self.path.clone(),
+            });
+        }
+        Ok(())
+    }
+
+    /// [`Store::verify`] without the `fstat`: only a change already seen
+    /// (a truncation the SIGBUS handler answered, or an earlier check).
+    pub fn verify_cheap(&self) -> Result<()> {
+        if self.map.poisoned() {
+            return Err(CoreError::FileChanged {
+                path: self.path.clone(),
+            });
+        }
+        Ok(())
+    }
+
     /// Number of materials `N`.
     pub fn n(&self) -> usize {
         self.layout.n
@@ -287,7 +315,7 @@ impl Store {
 
     /// The centred values, `rows * n`, row-major.
     pub fn z(&self) -> Rows<'_> {
-        let bytes = &self.map[self.layout.z..];
+        let bytes = &self.map.bytes()[self.layout.z..];
         match self.precision {
             Precision::F32 => Rows::F32(bytemuck::cast_slice(bytes)),
             Precision::F64 => Rows::F64(bytemuck::cast_slice(bytes)),

@@ -1,0 +1,189 @@
+//! Read-only file maps that survive the file changing under them.
+//!
+//! Reading a memory-mapped file that another program truncates kills the
+//! process with SIGBUS; one that is rewritten in place at the same size
+//! silently changes under the reader. A [`GuardedMap`] turns both into an
+//! answer the caller can act on:
+//!
+//! - **Shrunk or truncated:** the first read past the new end raises
+//!   SIGBUS. A process-wide handler (installed once, in front of the
+//!   process's own, which still gets every other SIGBUS) maps zero pages
+//!   over the whole map and marks it poisoned; the read returns zeros, and
+//!   [`GuardedMap::changed`] says so.
+//! - **Rewritten, same size:** [`GuardedMap::changed`] also compares the
+//!   file's size and modification time with those seen when it was mapped
+//!   (one `fstat`, or one `stat` of the path for maps that do not keep
+//!   their file open).
+//!
+//! So a reader maps, reads, then asks [`GuardedMap::changed`] before it
+//! trusts what it read; once changed, a map stays changed.
+//!
+//! ```
+//! use brdf_mapguard::{GuardedMap, Watch};
+//! let dir = tempfile::tempdir().unwrap();
+//! let path = dir.path().join("data");
+//! std::fs::write(&path, vec![7u8; 10_000]).unwrap();
+//! let map = GuardedMap::open(&path, Watch::Descriptor).unwrap();
+//! std::fs::OpenOptions::new().write(true).open(&path).unwrap().set_len(100).unwrap();
+//! let sum: u64 = map.iter().map(|b| *b as u64).sum(); // no SIGBUS: zeros
+//! assert!(map.changed());
+//! # let _ = sum;
+//! ```
+#![warn(missing_docs)]
+
+use std::fs::File;
+use std::io;
+use std::os::unix::fs::MetadataExt;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use memmap2::Mmap;
+
+#[cfg(target_os = "linux")]
+mod handler;
+mod registry;
+
+/// How [`GuardedMap::changed`] looks for a same-size rewrite.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Watch {
+    /// Keep the file open and `fstat` it: sees any write to the mapped file,
+    /// even after it is renamed or unlinked. One descriptor per map.
+    Descriptor,
+    /// `stat` the path: no descriptor held (for the many inputs of a fit);
+    /// a path that now names another file (replaced by a rename) leaves the
+    /// mapped file as it was, so only a write to the same file counts.
+    Path,
+}
+
+/// What a file's metadata says about its content.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Stamp {
+    dev: u64,
+    ino: u64,
+    size: u64,
+    mtime: (i64, i64),
+}
+
+impl Stamp {
+    fn of(m: &std::fs::Metadata) -> Stamp {
+        Stamp {
+            dev: m.dev(),
+            ino: m.ino(),
+            size: m.size(),
+            mtime: (m.mtime(), m.mtime_nsec()),
+        }
+    }
+}
+
+/// A read-only map of a whole file, registered with the SIGBUS handler
+/// while it lives. Dereferences to its bytes.
+pub struct GuardedMap {
+    map: Mmap,
+    path: PathBuf,
+    file: Option<File>,
+    seen: Stamp,
+    slot: Option<registry::SlotId>,
+    changed: AtomicBool,
+}
+
+impl std::fmt::Debug for GuardedMap {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GuardedMap")
+            .field("path", &self.path)
+            .field("len", &self.map.len())
+            .finish()
+    }
+}
+
+impl GuardedMap {
+    /// Open and map the file at `path`, read-only.
+    pub fn open(path: &Path, watch: Watch) -> io::Result<GuardedMap> {
+        let file = File::open(path)?;
+        let seen = Stamp::of(&file.metadata()?);
+        #[cfg(target_os = "linux")]
+        handler::install();
+        // SAFETY: a read-only map. A file changed under it cannot make safe
+        // Rust unsound here: its bytes are read as plain integers and
+        // floats, and a truncation (SIGBUS) is answered with zero pages by
+        // the handler, for as long as the range is registered (until drop).
+        let map = unsafe { Mmap::map(&file) }?;
+        let slot = if map.is_empty() {
+            None
+        } else {
+            Some(
+                registry::register(map.as_ptr() as usize, map.len()).ok_or_else(|| {
+                    io::Error::other(format!(
+                        "more than {} files mapped at once",
+                        registry::SLOTS
+                    ))
+                })?,
+            )
+        };
+        Ok(GuardedMap {
+            map,
+            path: path.to_path_buf(),
+            file: (watch == Watch::Descriptor).then_some(file),
+            seen,
+            slot,
+            changed: AtomicBool::new(false),
+        })
+    }
+
+    /// The mapped bytes.
+    pub fn bytes(&self) -> &[u8] {
+        &self.map
+    }
+
+    /// Has the file been truncated under the map (its pages then read as
+    /// zeros), or rewritten since it was mapped? Sticky: once true, always
+    /// true. Costs an atomic load and one `fstat` (or `stat`).
+    pub fn changed(&self) -> bool {
+        if self.poisoned() {
+            return true;
+        }
+        let now = match &self.file {
+            Some(file) => file.metadata().map(|m| Stamp::of(&m)),
+            None => std::fs::metadata(&self.path).map(|m| Stamp::of(&m)),
+        };
+        let changed = match now {
+            // Another file at the path: the mapped one is as it was.
+            Ok(now)
+                if self.file.is_none() && (now.dev, now.ino) != (self.seen.dev, self.seen.ino) =>
+            {
+                false
+            }
+            Ok(now) => now != self.seen,
+            // The descriptor always answers; a path may be gone (removed or
+            // renamed), which leaves the mapped file as it was.
+            Err(_) => self.file.is_some(),
+        };
+        if changed {
+            self.changed.store(true, Ordering::Release);
+        }
+        changed
+    }
+
+    /// Has a change already been seen (by the SIGBUS handler or
+    /// [`GuardedMap::changed`])? An atomic load, no system call.
+    pub fn poisoned(&self) -> bool {
+        self.changed.load(Ordering::Acquire) || self.slot.is_some_and(registry::poisoned)
+    }
+}
+
+impl std::ops::Deref for GuardedMap {
+    type Target = [u8];
+
+    fn deref(&self) -> &[u8] {
+        &self.map
+    }
+}
+
+impl Drop for GuardedMap {
+    fn drop(&mut self) {
+        // Unregistered before the map goes, so the handler never touches
+        // an address that is no longer ours.
+        if let Some(slot) = self.slot.take() {
+            registry::unregister(slot);
+        }
+    }
+}
