@@ -50,9 +50,19 @@ def open_model(path):
         return model
 
 
+def _has(props, key):
+    try:
+        return key in props
+    except TypeError:  # Mitsuba before 3.6
+        return props.has_property(key)
+
+
 def _material(props):
     """The :class:`brdf_atlas.Material` a plugin's properties describe."""
-    has = props.has_property
+
+    def has(key):
+        return _has(props, key)
+
     if has("filename"):
         if has("model"):
             raise InputError("brdf_atlas BSDF: give either 'model' or 'filename', not both")
