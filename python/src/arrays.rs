@@ -194,7 +194,10 @@ pub fn table_from_array(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<MerlTabl
                 .py()
                 .import("numpy")?
                 .call_method1("asarray", (obj, "float64"));
-            match converted.as_ref().map(|c| c.extract::<PyReadonlyArray4<'_, f64>>()) {
+            match converted
+                .as_ref()
+                .map(|c| c.extract::<PyReadonlyArray4<'_, f64>>())
+            {
                 Ok(Ok(a)) => a,
                 _ => {
                     return Err(Failure::input(format!(

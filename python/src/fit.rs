@@ -136,9 +136,24 @@ pub fn fit<'py>(
     min_step: f64,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let transform = choice(transform, "transform", TransformKind::parse, "\"log\" or \"raw\"")?;
-    let optimizer = choice(optimizer, "optimizer", OptimizerKind::parse, "\"hooke-jeeves\" or \"lbfgs\"")?;
-    let precision = choice(store_precision, "store_precision", Precision::parse, "\"f32\" or \"f64\"")?;
+    let transform = choice(
+        transform,
+        "transform",
+        TransformKind::parse,
+        "\"log\" or \"raw\"",
+    )?;
+    let optimizer = choice(
+        optimizer,
+        "optimizer",
+        OptimizerKind::parse,
+        "\"hooke-jeeves\" or \"lbfgs\"",
+    )?;
+    let precision = choice(
+        store_precision,
+        "store_precision",
+        Precision::parse,
+        "\"f32\" or \"f64\"",
+    )?;
     let params = GplvmParams::new(q)
         .length_scale(length_scale)
         .noise(noise)
@@ -185,7 +200,8 @@ pub fn fit<'py>(
             Failure::from(e)
         })
     })?;
-    if let Some(e) = callback.and_then(|c| c.error.into_inner().unwrap_or_else(|e| e.into_inner())) {
+    if let Some(e) = callback.and_then(|c| c.error.into_inner().unwrap_or_else(|e| e.into_inner()))
+    {
         return Err(e);
     }
     let d = PyDict::new(py);

@@ -27,8 +27,14 @@ use crate::errors::Failure;
 /// (-1 where unmeasured).
 #[pyfunction]
 #[pyo3(signature = (path, raw = false))]
-fn read_merl<'py>(py: Python<'py>, path: PathBuf, raw: bool) -> PyResult<Bound<'py, PyArray4<f64>>> {
-    let table = py.detach(|| MerlTable::read(&path)).map_err(Failure::from)?;
+fn read_merl<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    raw: bool,
+) -> PyResult<Bound<'py, PyArray4<f64>>> {
+    let table = py
+        .detach(|| MerlTable::read(&path))
+        .map_err(Failure::from)?;
     Ok(material::table_array(py, &table, raw))
 }
 

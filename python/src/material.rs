@@ -157,8 +157,13 @@ impl PyMaterial {
     /// The material of a MERL `.binary` file.
     #[staticmethod]
     fn from_merl(py: Python<'_>, path: PathBuf) -> PyResult<PyMaterial> {
-        let table = py.detach(|| MerlTable::read(&path)).map_err(Failure::from)?;
-        Ok(PyMaterial::new(Source::Table(table), path.display().to_string()))
+        let table = py
+            .detach(|| MerlTable::read(&path))
+            .map_err(Failure::from)?;
+        Ok(PyMaterial::new(
+            Source::Table(table),
+            path.display().to_string(),
+        ))
     }
 
     /// The table dims `(n_theta_h, n_theta_d, n_phi_d)`.
@@ -178,7 +183,10 @@ impl PyMaterial {
         wi: &Bound<'py, PyAny>,
         wo: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let (wi, wo) = (Directions::extract(wi, "wi")?, Directions::extract(wo, "wo")?);
+        let (wi, wo) = (
+            Directions::extract(wi, "wi")?,
+            Directions::extract(wo, "wo")?,
+        );
         let (vi, vo) = (wi.view(), wo.view());
         let out = py.detach(|| {
             check_pairs(vi, vo)?;
@@ -261,7 +269,11 @@ impl PyMaterial {
                 });
             Ok((dirs, pdfs, values))
         })?;
-        Ok((rows3(py, dirs), Array1::from(pdfs).into_pyarray(py), rows3(py, values)))
+        Ok((
+            rows3(py, dirs),
+            Array1::from(pdfs).into_pyarray(py),
+            rows3(py, values),
+        ))
     }
 
     /// The density per solid angle (n,) with which `sample(wi, ..., method)`
@@ -275,7 +287,10 @@ impl PyMaterial {
         method: &str,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let m = self::method(method)?;
-        let (wi, wo) = (Directions::extract(wi, "wi")?, Directions::extract(wo, "wo")?);
+        let (wi, wo) = (
+            Directions::extract(wi, "wi")?,
+            Directions::extract(wo, "wo")?,
+        );
         let (vi, vo) = (wi.view(), wo.view());
         let out = py.detach(|| {
             check_pairs(vi, vo)?;
@@ -301,7 +316,10 @@ impl PyMaterial {
         method: &str,
     ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<f64>>)> {
         let m = self::method(method)?;
-        let (wi, wo) = (Directions::extract(wi, "wi")?, Directions::extract(wo, "wo")?);
+        let (wi, wo) = (
+            Directions::extract(wi, "wi")?,
+            Directions::extract(wo, "wo")?,
+        );
         let (vi, vo) = (wi.view(), wo.view());
         let (values, pdfs) = py.detach(|| {
             check_pairs(vi, vo)?;

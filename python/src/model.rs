@@ -13,7 +13,9 @@ use pyo3::prelude::*;
 
 use crate::arrays::{Directions, describe, point, table_from_array};
 use crate::errors::{Failure, Result};
-use crate::material::{OwnedBlend, PyMaterial, Source, check_pairs, eval_pairs, rows3, table_array};
+use crate::material::{
+    OwnedBlend, PyMaterial, Source, check_pairs, eval_pairs, rows3, table_array,
+};
 
 /// Largest quadrature sample count of a map (as the C library's bound).
 const MAX_SAMPLES: usize = 1 << 20;
@@ -144,7 +146,11 @@ impl PyModel {
 
     /// The N blend weights at `x`: every output there is the mean material
     /// plus this weighted sum of the materials, in the transformed space.
-    fn weights<'py>(&self, py: Python<'py>, x: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    fn weights<'py>(
+        &self,
+        py: Python<'py>,
+        x: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let x = point(x)?;
         let w = self.inner.weights_at(&x).map_err(Failure::from)?;
         Ok(Array1::from(w).into_pyarray(py))
@@ -164,7 +170,12 @@ impl PyModel {
     /// values `brdf-atlas reconstruct` writes (MERL's channel scales not
     /// applied, -1 where unmeasured).
     #[pyo3(signature = (x, raw = false))]
-    fn table<'py>(&self, py: Python<'py>, x: &Bound<'py, PyAny>, raw: bool) -> PyResult<Bound<'py, PyArray4<f64>>> {
+    fn table<'py>(
+        &self,
+        py: Python<'py>,
+        x: &Bound<'py, PyAny>,
+        raw: bool,
+    ) -> PyResult<Bound<'py, PyArray4<f64>>> {
         let x = point(x)?;
         let t = py.detach(|| Ok::<_, Failure>(self.inner.at(&x)?.table()))?;
         Ok(table_array(py, &t, raw))
@@ -183,7 +194,10 @@ impl PyModel {
         wo: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let x = point(x)?;
-        let (wi, wo) = (Directions::extract(wi, "wi")?, Directions::extract(wo, "wo")?);
+        let (wi, wo) = (
+            Directions::extract(wi, "wi")?,
+            Directions::extract(wo, "wo")?,
+        );
         let (vi, vo) = (wi.view(), wo.view());
         let out = py.detach(|| {
             check_pairs(vi, vo)?;
@@ -211,14 +225,19 @@ impl PyModel {
         let view = view.map_or_else(View::default, |(x0, x1, y0, y1)| View { x0, x1, y0, y1 });
         let samples = match samples {
             Some(s) if s == 0 || s > MAX_SAMPLES => {
-                return Err(Failure::input(format!("samples = {s}: expected 1 to {MAX_SAMPLES}")).into());
+                return Err(
+                    Failure::input(format!("samples = {s}: expected 1 to {MAX_SAMPLES}")).into(),
+                );
             }
             Some(s) => Some(s),
             None if self.inner.file().transform.is_linear() => None,
             None => Some(DEFAULT_SAMPLES),
         };
         let map = py
-            .detach(|| self.inner.albedo_map(width, height, view, samples, &NoProgress))
+            .detach(|| {
+                self.inner
+                    .albedo_map(width, height, view, samples, &NoProgress)
+            })
             .map_err(Failure::from)?;
         let flat: Vec<f32> = map.rgb.iter().flatten().copied().collect();
         Ok(Array3::from_shape_vec((map.height, map.width, 3), flat)
@@ -249,11 +268,10 @@ impl PyModel {
             ))
             .into());
         };
-        let located = py
-            .detach(|| {
-                let file = MerlFile::open(&path)?;
-                Ok::<_, Failure>(self.inner.locate(&file)?)
-            })?;
+        let located = py.detach(|| {
+            let file = MerlFile::open(&path)?;
+            Ok::<_, Failure>(self.inner.locate(&file)?)
+        })?;
         let names = self.inner.names();
         Ok(Location {
             point: located.point,

@@ -221,7 +221,13 @@ pub fn sample(table: Option<&Tabulated>, wi: Vec3, u: [f64; 2]) -> Option<(Vec3,
     if wi[2] <= 0.0 {
         return None;
     }
-    let u = u.map(|v| if v.is_finite() { v.clamp(0.0, 1.0 - f64::EPSILON / 2.0) } else { 0.0 });
+    let u = u.map(|v| {
+        if v.is_finite() {
+            v.clamp(0.0, 1.0 - f64::EPSILON / 2.0)
+        } else {
+            0.0
+        }
+    });
     let s = slice_of(wi[2]);
     let c = cosine_share(table, s);
     let wo = match table {
