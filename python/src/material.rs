@@ -18,6 +18,11 @@ use crate::sampler::{self, Method, Tabulated};
 
 type BlendOf<'a> = Blend<'a>;
 
+/// An (n, 3) float64 array handed to Python.
+type Rows<'py> = Bound<'py, PyArray2<f64>>;
+/// An (n,) float64 array handed to Python.
+type Column<'py> = Bound<'py, PyArray1<f64>>;
+
 self_cell!(
     /// A blend together with the model it borrows.
     pub struct OwnedBlend {
@@ -222,18 +227,13 @@ impl PyMaterial {
     /// and the reflectance there (n, 3), all zero where `wi` is at or
     /// below the horizon.
     #[pyo3(signature = (wi, u, method = "tabulated"))]
-    #[allow(clippy::type_complexity)]
     fn sample<'py>(
         &self,
         py: Python<'py>,
         wi: &Bound<'py, PyAny>,
         u: &Bound<'py, PyAny>,
         method: &str,
-    ) -> PyResult<(
-        Bound<'py, PyArray2<f64>>,
-        Bound<'py, PyArray1<f64>>,
-        Bound<'py, PyArray2<f64>>,
-    )> {
+    ) -> PyResult<(Rows<'py>, Column<'py>, Rows<'py>)> {
         let m = self::method(method)?;
         let wi = Directions::extract(wi, "wi")?;
         let u = Directions::extract_cols(u, "u", 2)?;
@@ -314,7 +314,7 @@ impl PyMaterial {
         wi: &Bound<'py, PyAny>,
         wo: &Bound<'py, PyAny>,
         method: &str,
-    ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<f64>>)> {
+    ) -> PyResult<(Rows<'py>, Column<'py>)> {
         let m = self::method(method)?;
         let (wi, wo) = (
             Directions::extract(wi, "wi")?,
