@@ -2,6 +2,7 @@
 classes and functions)."""
 
 import os
+import pathlib
 from typing import Callable, Literal, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -37,7 +38,7 @@ class Material:
 class Model:
     def __init__(self, path: _Path) -> None: ...
     @property
-    def path(self) -> str: ...
+    def path(self) -> pathlib.Path: ...
     @property
     def names(self) -> list[str]: ...
     @property

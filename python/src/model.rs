@@ -50,12 +50,13 @@ pub struct Location {
 #[pymethods]
 impl Location {
     fn __repr__(&self) -> String {
+        let nearest = self
+            .nearest
+            .first()
+            .map_or_else(|| "None".to_string(), |n| format!("{:?}", n.0));
         format!(
-            "Location(point={:?}, rmse={:.6}, spread={:.6}, nearest={:?})",
-            self.point,
-            self.rmse,
-            self.spread,
-            self.nearest.first().map(|n| &n.0)
+            "Location(point={:?}, rmse={:.4e}, spread={:.4e}, nearest={nearest})",
+            self.point, self.rmse, self.spread
         )
     }
 }
