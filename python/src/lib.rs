@@ -32,10 +32,13 @@ fn read_merl<'py>(
     path: PathBuf,
     raw: bool,
 ) -> PyResult<Bound<'py, PyArray4<f64>>> {
-    let table = py
-        .detach(|| MerlTable::read(&path))
+    let t = py
+        .detach(|| {
+            let t = MerlTable::read(&path)?;
+            Ok::<_, brdf_merl::MerlError>((t.dims(), arrays::table_values(&t, raw)))
+        })
         .map_err(Failure::from)?;
-    Ok(material::table_array(py, &table, raw))
+    Ok(material::table_array(py, t))
 }
 
 /// Write a (3, n_theta_h, n_theta_d, n_phi_d) array of reflectance in

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};
 
 use brdf_atlas_core::{Blend, Model};
-use brdf_merl::{MerlTable, Quadrature, Vec3};
+use brdf_merl::{Dims, MerlTable, Quadrature, Vec3};
 use numpy::ndarray::{Array1, Array2, Array4};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray4};
 use pyo3::prelude::*;
@@ -59,7 +59,7 @@ impl Source {
         }
     }
 
-    fn dims(&self) -> brdf_merl::Dims {
+    fn dims(&self) -> Dims {
         match self {
             Source::Blend(b) => b.borrow_owner().dims(),
             Source::Table(t) => t.dims(),
@@ -106,10 +106,13 @@ pub fn rows3<'py>(py: Python<'py>, v: Vec<f64>) -> Bound<'py, PyArray2<f64>> {
         .into_pyarray(py)
 }
 
-/// A table as a `(3, n_theta_h, n_theta_d, n_phi_d)` float64 array.
-pub fn table_array<'py>(py: Python<'py>, t: &MerlTable, raw: bool) -> Bound<'py, PyArray4<f64>> {
-    let d = t.dims();
-    Array4::from_shape_vec((3, d.theta_h, d.theta_d, d.phi_d), table_values(t, raw))
+/// A table's dims and values as [`table_values`] gives them (computed
+/// without the GIL), as a `(3, n_theta_h, n_theta_d, n_phi_d)` float64 array.
+pub fn table_array<'py>(
+    py: Python<'py>,
+    (d, values): (Dims, Vec<f64>),
+) -> Bound<'py, PyArray4<f64>> {
+    Array4::from_shape_vec((3, d.theta_h, d.theta_d, d.phi_d), values)
         .expect("length matches dims")
         .into_pyarray(py)
 }
@@ -205,8 +208,11 @@ impl PyMaterial {
     /// MERL file (MERL's channel scales not applied, -1 where unmeasured).
     #[pyo3(signature = (raw = false))]
     fn table<'py>(&self, py: Python<'py>, raw: bool) -> Bound<'py, PyArray4<f64>> {
-        let t = py.detach(|| self.source.table());
-        table_array(py, &t, raw)
+        let t = py.detach(|| {
+            let t = self.source.table();
+            (t.dims(), table_values(&t, raw))
+        });
+        table_array(py, t)
     }
 
     /// Albedo per channel: `(1/pi)` times the integral of `f cos_i cos_o`

@@ -11,7 +11,7 @@ use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArray4};
 use pyo3::prelude::*;
 
-use crate::arrays::{Directions, describe, point, table_from_array};
+use crate::arrays::{Directions, describe, point, table_from_array, table_values};
 use crate::errors::{Failure, Result};
 use crate::material::{
     OwnedBlend, PyMaterial, Source, check_pairs, eval_pairs, rows3, table_array,
@@ -178,8 +178,11 @@ impl PyModel {
         raw: bool,
     ) -> PyResult<Bound<'py, PyArray4<f64>>> {
         let x = point(x)?;
-        let t = py.detach(|| Ok::<_, Failure>(self.inner.at(&x)?.table()))?;
-        Ok(table_array(py, &t, raw))
+        let t = py.detach(|| {
+            let t = self.inner.at(&x)?.table();
+            Ok::<_, Failure>((t.dims(), table_values(&t, raw)))
+        })?;
+        Ok(table_array(py, t))
     }
 
     /// RGB reflectance (1/sr) at `x` for direction pairs: `wi`, `wo` arrays
