@@ -13,7 +13,8 @@ use std::path::{Path, PathBuf};
 
 const MAX_LINES: usize = 700;
 
-/// The crates' source roots, relative to the workspace.
+/// The crates' source roots, relative to the workspace (the Python
+/// package's crate too, though it is outside the workspace).
 const ROOTS: &[&str] = &[
     "src",
     "crates/core/src",
@@ -21,6 +22,7 @@ const ROOTS: &[&str] = &[
     "crates/merl/src",
     "crates/ffi/src",
     "crates/hostile/src",
+    "python/src",
 ];
 
 fn workspace() -> PathBuf {
