@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};
 
-use brdf_atlas_core::{Blend, Model};
+use brdf_atlas_core::{Blend, CoreError, Model};
 use brdf_merl::{Dims, MerlTable, Quadrature, Vec3};
 use numpy::ndarray::{Array1, Array2, Array4};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray4};
@@ -51,11 +51,21 @@ impl Source {
         }
     }
 
-    /// The whole table in MERL raw units.
-    pub fn table(&self) -> MerlTable {
+    /// The whole table in MERL raw units; an error if the model's store
+    /// changed on disk while open.
+    pub fn table(&self) -> Result<MerlTable, CoreError> {
         match self {
             Source::Blend(b) => b.borrow_dependent().table(),
-            Source::Table(t) => t.clone(),
+            Source::Table(t) => Ok(t.clone()),
+        }
+    }
+
+    /// An error if the model's store changed on disk while open (point
+    /// queries read zeros from a truncated store: check after them).
+    pub fn verify(&self) -> Result<(), CoreError> {
+        match self {
+            Source::Blend(b) => b.borrow_owner().verify(),
+            Source::Table(_) => Ok(()),
         }
     }
 
@@ -198,7 +208,9 @@ impl PyMaterial {
         let (vi, vo) = (wi.view(), wo.view());
         let out = py.detach(|| {
             check_pairs(vi, vo)?;
-            Ok::<_, Failure>(eval_pairs(&self.source, vi, vo))
+            let out = eval_pairs(&self.source, vi, vo);
+            self.source.verify()?;
+            Ok::<_, Failure>(out)
         })?;
         Ok(rows3(py, out))
     }
@@ -207,23 +219,23 @@ impl PyMaterial {
     /// in 1/sr with NaN where unmeasured, or with `raw=True` the values of a
     /// MERL file (MERL's channel scales not applied, -1 where unmeasured).
     #[pyo3(signature = (raw = false))]
-    fn table<'py>(&self, py: Python<'py>, raw: bool) -> Bound<'py, PyArray4<f64>> {
+    fn table<'py>(&self, py: Python<'py>, raw: bool) -> PyResult<Bound<'py, PyArray4<f64>>> {
         let t = py.detach(|| {
-            let t = self.source.table();
-            (t.dims(), table_values(&t, raw))
-        });
-        table_array(py, t)
+            let t = self.source.table()?;
+            Ok::<_, Failure>((t.dims(), table_values(&t, raw)))
+        })?;
+        Ok(table_array(py, t))
     }
 
     /// Albedo per channel: `(1/pi)` times the integral of `f cos_i cos_o`
     /// over both hemispheres (a Lambertian `rho / pi` gives `rho`),
     /// integrated over the table's bins with 2 x 2 x 2 points a bin.
-    fn albedo(&self, py: Python<'_>) -> (f64, f64, f64) {
+    fn albedo(&self, py: Python<'_>) -> PyResult<(f64, f64, f64)> {
         let a = py.detach(|| {
-            let t = self.source.table();
-            Quadrature::dense(t.dims(), 2).albedo(&t)
-        });
-        (a[0], a[1], a[2])
+            let t = self.source.table()?;
+            Ok::<_, Failure>(Quadrature::dense(t.dims(), 2).albedo(&t))
+        })?;
+        Ok((a[0], a[1], a[2]))
     }
 
     /// Draw outgoing directions: `wi` (n, 3), `u` (n, 2) uniform numbers in
@@ -336,6 +348,7 @@ impl PyMaterial {
                 .with_min_len(MIN_PARALLEL)
                 .map(|k| sampler::pdf(table, vi.get(k), vo.get(k)))
                 .collect();
+            self.source.verify()?;
             Ok::<_, Failure>((values, pdfs))
         })?;
         Ok((rows3(py, values), Array1::from(pdfs).into_pyarray(py)))

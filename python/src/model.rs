@@ -179,7 +179,7 @@ impl PyModel {
     ) -> PyResult<Bound<'py, PyArray4<f64>>> {
         let x = point(x)?;
         let t = py.detach(|| {
-            let t = self.inner.at(&x)?.table();
+            let t = self.inner.at(&x)?.table()?;
             Ok::<_, Failure>((t.dims(), table_values(&t, raw)))
         })?;
         Ok(table_array(py, t))
@@ -206,7 +206,9 @@ impl PyModel {
         let out = py.detach(|| {
             check_pairs(vi, vo)?;
             let source = Source::Blend(self.blend(&x)?);
-            Ok::<_, Failure>(eval_pairs(&source, vi, vo))
+            let out = eval_pairs(&source, vi, vo);
+            source.verify()?;
+            Ok::<_, Failure>(out)
         })?;
         Ok(rows3(py, out))
     }
