@@ -61,7 +61,10 @@ def test_eval_equals_the_c_library_and_the_cli(request, which, cli, clib, tmp_pa
     batch.write_text("".join(" ".join(repr(float(v)) for v in row) + "\n" for row in angles))
     out = subprocess.run([str(cli), "eval", str(model.path), "--at", f"{x[0]!r},{x[1]!r}",
                           "--batch", str(batch)], check=True, capture_output=True, text=True).stdout
+    # Two header lines, a row a pair, then the confidence line.
     rows = out.splitlines()[2:]
+    assert rows[-1].startswith("confidence:")
+    rows = rows[:-1]
     assert len(rows) == len(angles)
     for row, value in zip(rows, ours):
         fields = row.split()

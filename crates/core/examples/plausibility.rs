@@ -20,25 +20,62 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let points: usize = args.next().map_or(Ok(200), |s| s.parse())?;
     let seed: u64 = args.next().map_or(Ok(1), |s| s.parse())?;
     let model = Model::open(&path)?;
+    if points > 0 {
+        sweep(&model, points, seed)?;
+    }
+    if std::env::var_os("PLAUSIBILITY_LOO").is_some() {
+        leave_one_out(&model)?;
+    }
+    Ok(())
+}
+
+/// Leave-one-out errors of the GP, of convex blends at several length
+/// scales, and of the plausible rule towards each at several budgets.
+fn leave_one_out(model: &Model) -> Result<(), Box<dyn std::error::Error>> {
     let (kernel, latent) = (model.file().kernel, model.latent().as_ref());
     let gp = loo::gp_predictor(&kernel, latent, true)?;
-    let convex = loo::convex_predictor(&kernel, latent)?;
-    let (nonneg, steps) =
-        loo::plausible_predictor(model.store(), gp.as_ref(), convex.as_ref(), &NoProgress)?;
-    let ev = loo::evaluate(model.store(), &[gp, convex, nonneg], &NoProgress)?;
-    let names = ["gp", "convex", "plausible"];
-    for (name, e) in names.iter().zip(&ev.errors) {
+    let scales = [1.0, 0.3, 0.15, 0.08];
+    let budgets = [5e-4, 1e-3, 1e-2];
+    let mut predictors = vec![gp.clone()];
+    let mut names = vec!["gp".to_string()];
+    let mut moved = vec![0];
+    for l in scales {
+        let k = brdf_atlas_core::Kernel {
+            length_scale: l,
+            ..kernel
+        };
+        let convex = loo::convex_predictor(&k, latent)?;
+        let rules = loo::plausible_predictors(
+            model.store(),
+            gp.as_ref(),
+            convex.as_ref(),
+            &budgets,
+            &NoProgress,
+        )?;
+        predictors.push(convex);
+        names.push(format!("convex l={l}"));
+        moved.push(0);
+        for (b, (p, steps)) in budgets.iter().zip(rules) {
+            predictors.push(p);
+            names.push(format!("plausible l={l} budget={}%", 100.0 * b));
+            moved.push(steps.iter().filter(|&&t| t > 0.0).count());
+        }
+    }
+    let ev = loo::evaluate(model.store(), &predictors, &NoProgress)?;
+    let base = ev.errors[0].log_total(ev.scored_rows);
+    for ((name, e), m) in names.iter().zip(&ev.errors).zip(&moved) {
+        let err = e.log_total(ev.scored_rows);
         println!(
-            "leave-one-out {name:12}  ln(1 + f cos cos) RMSE {:.5}  reflectance RMSE {:.4}",
-            e.log_total(ev.scored_rows),
+            "leave-one-out {name:34} ln(1 + f cos cos) RMSE {err:.5} ({:+.1}% against gp)  reflectance RMSE {:.3}  moved {m}",
+            100.0 * (err / base - 1.0),
             e.raw_total(ev.scored_rows)
         );
     }
-    let moved = steps.iter().filter(|&&t| t > 0.0).count();
-    println!(
-        "held-out materials whose weights moved: {moved} of {}",
-        steps.len()
-    );
+    Ok(())
+}
+
+/// Plausibility at `points` random points of the default view, per rule.
+fn sweep(model: &Model, points: usize, seed: u64) -> Result<(), Box<dyn std::error::Error>> {
     let view = View::default();
     let mut rng = SplitMix64::new(seed);
     let xs: Vec<[f64; 2]> = (0..points)

@@ -44,7 +44,7 @@ use crate::simd::fold::{GROUPS, ordered_blocks};
 /// Rows of the store per block of the LOO pass.
 const BLOCK: usize = 1024;
 
-pub use super::nonneg::{convex_predictor, plausible_predictor};
+pub use super::nonneg::{convex_predictor, plausible_predictors};
 pub use super::predictors::{discarded, gp_predictor, pca_in_sample_predictor, pca_predictor};
 pub use crate::query::budget::{CLAMP_BUDGET, STEPS};
 

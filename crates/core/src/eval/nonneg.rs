@@ -59,16 +59,18 @@ pub fn convex_predictor(kernel: &Kernel, latent: MatRef<'_, f64>) -> Result<Mat<
     }))
 }
 
-/// The leave-one-out predictor of [`crate::BlendRule::Plausible`]: row `i`
-/// is `(1 - t_i) P_i + t_i V_i` with `t_i` chosen as a reconstruction at
-/// material `i`'s latent point would choose it, from the others. One pass
-/// over the store. Returns the predictor and the steps `t`.
-pub fn plausible_predictor(
+/// The leave-one-out predictors of [`crate::BlendRule::Plausible`], one per
+/// clamp budget in `budgets`: row `i` is `(1 - t_i) P_i + t_i V_i` with `t_i`
+/// chosen as a reconstruction at material `i`'s latent point would choose
+/// it, from the others. One pass over the store for every budget. Returns
+/// each predictor with its steps `t`.
+pub fn plausible_predictors(
     store: &Store,
     gp: MatRef<'_, f64>,
     convex: MatRef<'_, f64>,
+    budgets: &[f64],
     progress: &dyn Progress,
-) -> Result<(Mat<f64>, Vec<f64>)> {
+) -> Result<Vec<(Mat<f64>, Vec<f64>)>> {
     let n = store.n();
     for p in [gp, convex] {
         if p.nrows() != n || p.ncols() != n {
@@ -133,9 +135,14 @@ pub fn plausible_predictor(
     for (b, _, _) in &parts {
         budget.merge(b);
     }
-    let steps = budget.steps();
-    let p = Mat::from_fn(n, n, |i, j| {
-        (1.0 - steps[i]) * gp[(i, j)] + steps[i] * convex[(i, j)]
-    });
-    Ok((p, steps))
+    Ok(budgets
+        .iter()
+        .map(|&b| {
+            let steps = budget.steps(b);
+            let p = Mat::from_fn(n, n, |i, j| {
+                (1.0 - steps[i]) * gp[(i, j)] + steps[i] * convex[(i, j)]
+            });
+            (p, steps)
+        })
+        .collect())
 }

@@ -23,7 +23,7 @@ use serde::Serialize;
 use crate::data::transform::InverseForm;
 use crate::error::Result;
 use crate::model::Model;
-use crate::query::budget::{Budget, counted};
+use crate::query::budget::{Budget, CLAMP_BUDGET, counted};
 use crate::query::reconstruct::Blend;
 
 /// Rows a worker handles at once (fixed, so sums do not depend on the thread count).
@@ -173,7 +173,7 @@ impl Model {
             budget.merge(p);
         }
         self.verify()?;
-        Ok(budget.steps()[0])
+        Ok(budget.steps(CLAMP_BUDGET)[0])
     }
 }
 
