@@ -313,11 +313,17 @@ fn reconstruct_takes_q_coordinates_in_a_higher_dimensional_model() {
     assert_one_error_line(&out, &["--at expects 3 numbers", "got 2"]);
 }
 
-/// The R, G, B values of each data row of `eval`'s report, `None` for a pair without value.
+/// The R, G, B values of each data row of `eval`'s report (after two
+/// header lines, before the closing `confidence:` line), `None` for a pair
+/// without value.
 fn eval_rows(stdout: &str) -> Vec<Option<[f64; 3]>> {
-    stdout
-        .lines()
-        .skip(2)
+    let lines: Vec<&str> = stdout.lines().skip(2).collect();
+    let (last, rows) = lines.split_last().expect("eval printed rows");
+    assert!(
+        last.starts_with("confidence: predictive variance "),
+        "{last:?}"
+    );
+    rows.iter()
         .map(|l| {
             if l.ends_with("below horizon / unmeasured") {
                 return None;

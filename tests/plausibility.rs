@@ -1,0 +1,164 @@
+//! `reconstruct --json`, `--blend`, and the confidence and plausibility
+//! lines of `reconstruct` and `eval`, against the library.
+
+mod common;
+
+use std::path::Path;
+
+use brdf_atlas_core::{BlendRule, Model};
+use brdf_merl::MerlTable;
+use common::{brdf_atlas, fit, synth, texts};
+
+const DIMS: &str = "12,12,24";
+
+fn fitted(dir: &Path) -> std::path::PathBuf {
+    let data = dir.join("merl");
+    synth(&data, 10, DIMS, 17);
+    let model = dir.join("model.atlas");
+    fit(&data, &model, &["--transform", "log"]);
+    model
+}
+
+#[test]
+fn reconstruct_json_is_the_blend_the_library_computes() {
+    let tmp = tempfile::tempdir().unwrap();
+    let model_path = fitted(tmp.path());
+    let model = Model::open(&model_path).unwrap();
+    for (rule, at) in [
+        (BlendRule::Gp, [0.3, -0.45]),
+        (BlendRule::Plausible, [-0.95, 0.9]),
+    ] {
+        let out_path = tmp.path().join(format!("{}.binary", rule.name()));
+        let out = brdf_atlas([
+            "reconstruct".as_ref(),
+            model_path.as_os_str(),
+            "--at".as_ref(),
+            format!("{},{}", at[0], at[1]).as_ref(),
+            "--blend".as_ref(),
+            rule.name().as_ref(),
+            "--json".as_ref(),
+            "-o".as_ref(),
+            out_path.as_os_str(),
+        ]);
+        let (stdout, stderr) = texts(&out);
+        assert!(out.status.success(), "{stderr}");
+        assert_eq!(stdout.lines().count(), 1, "one record: {stdout}");
+        let rec: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+        let blend = model.at_with(&at, rule).unwrap();
+        // Every weight by name, as the library has it, and they sum to the stated sum.
+        let weights = rec["weights"].as_object().unwrap();
+        assert_eq!(weights.len(), model.names().len());
+        for (name, w) in model.names().iter().zip(blend.weights()) {
+            assert_eq!(weights[name].as_f64().unwrap(), *w, "{name}");
+        }
+        let sum: f64 = blend.weights().iter().sum();
+        assert_eq!(rec["weight_sum"].as_f64().unwrap(), sum);
+        assert_eq!(rec["blend"], rule.name());
+        assert_eq!(rec["point"], serde_json::json!(at));
+        assert_eq!(rec["transform"]["name"], "log");
+        assert!(
+            rec["transform"]["formula"]
+                .as_str()
+                .unwrap()
+                .contains("ln(1 + f c)")
+        );
+        let p = blend.plausibility().unwrap();
+        assert_eq!(
+            rec["plausibility"]["clamped_reflectance"].as_f64().unwrap(),
+            p.clamped_reflectance
+        );
+        assert_eq!(
+            rec["plausibility"]["max_albedo"].as_f64().unwrap(),
+            p.max_albedo
+        );
+        assert_eq!(
+            rec["confidence"]["variance"].as_f64().unwrap(),
+            blend.confidence().variance
+        );
+        // The file is the blend's table.
+        let written = MerlTable::read(&out_path).unwrap();
+        assert_eq!(written.raw(), blend.table().unwrap().raw());
+    }
+}
+
+#[test]
+fn far_from_the_data_the_tools_say_the_model_knows_little() {
+    let tmp = tempfile::tempdir().unwrap();
+    let model_path = fitted(tmp.path());
+    let out_path = tmp.path().join("far.binary");
+    let out = brdf_atlas([
+        "reconstruct".as_ref(),
+        model_path.as_os_str(),
+        "--at".as_ref(),
+        "25,-25".as_ref(),
+        "-o".as_ref(),
+        out_path.as_os_str(),
+    ]);
+    let (stdout, stderr) = texts(&out);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stdout.contains("confidence: predictive variance 1.0000"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("plausibility: the clamp to >= 0 removes"),
+        "{stdout}"
+    );
+    // One warning line about the point (and one about the test's small dims).
+    let warnings: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.contains("knows little"))
+        .collect();
+    assert_eq!(warnings.len(), 1, "{stderr}");
+    assert!(
+        warnings[0].starts_with("warning: ") && warnings[0].contains("at (25.0000, -25.0000)"),
+        "{stderr}"
+    );
+    // Near a material: no warning.
+    let model = Model::open(&model_path).unwrap();
+    let x = [model.latent()[(0, 0)], model.latent()[(0, 1)]];
+    let out = brdf_atlas([
+        "eval".as_ref(),
+        model_path.as_os_str(),
+        "--at".as_ref(),
+        format!("{},{}", x[0], x[1]).as_ref(),
+        "--wi".as_ref(),
+        "30,0".as_ref(),
+        "--wo".as_ref(),
+        "30,180".as_ref(),
+        "--plausibility".as_ref(),
+    ]);
+    let (stdout, stderr) = texts(&out);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.is_empty(), "{stderr}");
+    let last: Vec<&str> = stdout.lines().rev().take(2).collect();
+    assert!(
+        last[0].starts_with("plausibility: the clamp removes"),
+        "{stdout}"
+    );
+    assert!(
+        last[1].starts_with("confidence: predictive variance 0.0"),
+        "{stdout}"
+    );
+}
+
+#[test]
+fn an_unknown_blend_rule_is_one_clear_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = brdf_atlas([
+        "reconstruct".as_ref(),
+        tmp.path().join("m.atlas").as_os_str(),
+        "--at".as_ref(),
+        "0,0".as_ref(),
+        "--blend".as_ref(),
+        "convex".as_ref(),
+        "-o".as_ref(),
+        tmp.path().join("x.binary").as_os_str(),
+    ]);
+    let (_, stderr) = texts(&out);
+    assert!(!out.status.success());
+    assert!(
+        stderr.contains("expected gp or plausible, got \"convex\""),
+        "{stderr}"
+    );
+}
