@@ -1,0 +1,104 @@
+//! The plausibility, confidence and blend-rule calls of the C library,
+//! against the core library they wrap.
+
+use std::ffi::{CStr, CString};
+use std::path::Path;
+use std::ptr::null_mut;
+
+use brdf_atlas_c::*;
+use brdf_atlas_core::{BlendRule, FitOptions, GplvmParams, Model, NoProgress, Precision};
+use brdf_atlas_core::{TransformKind, fit_dir};
+use brdf_merl::{Dims, synth};
+
+fn open(path: &Path) -> *mut BrdfAtlasModel {
+    let c = CString::new(path.to_str().unwrap()).unwrap();
+    let mut h = null_mut();
+    assert_eq!(
+        unsafe { brdf_atlas_model_open(c.as_ptr(), &mut h) },
+        BrdfAtlasStatus::Ok
+    );
+    h
+}
+
+#[test]
+fn plausibility_confidence_and_rules_are_the_core_library_s() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    synth::write_dir(&data, 9, Dims::new(8, 8, 16).unwrap(), 4).unwrap();
+    let path = tmp.path().join("m.atlas");
+    let options = FitOptions {
+        params: GplvmParams::new(2).check().unwrap(),
+        transform: TransformKind::Log,
+        precision: Precision::F64,
+    };
+    fit_dir(&data, &path, &options, &NoProgress).unwrap();
+    let model = Model::open(&path).unwrap();
+    let h = open(&path);
+    let len = model.dims().values();
+    for (x, y) in [(0.2, -0.3), (-1.0, 0.95), (20.0, 20.0)] {
+        for (rule, c_rule) in [
+            (BlendRule::Gp, BRDF_ATLAS_BLEND_GP),
+            (BlendRule::Plausible, BRDF_ATLAS_BLEND_PLAUSIBLE),
+        ] {
+            let blend = model.at_with(&[x, y], rule).unwrap();
+            let (p, c) = (blend.plausibility().unwrap(), blend.confidence());
+            let mut out = std::mem::MaybeUninit::<BrdfAtlasPlausibility>::zeroed();
+            let status =
+                unsafe { brdf_atlas_model_plausibility(h, x, y, c_rule, out.as_mut_ptr()) };
+            assert_eq!(status, BrdfAtlasStatus::Ok);
+            let out = unsafe { out.assume_init() };
+            assert_eq!(out.clamped_reflectance, p.clamped_reflectance);
+            assert_eq!(out.clamped_values, p.clamped_values);
+            assert_eq!(out.max_albedo, p.max_albedo);
+            assert_eq!(out.variance, c.variance);
+            assert_eq!(out.weight_sum, c.weight_sum);
+            assert_eq!(out.plausible, i32::from(p.is_plausible()));
+            assert_eq!(out.low_confidence, i32::from(c.is_low()));
+            let mut buf = vec![0.0f64; len];
+            let status = unsafe {
+                brdf_atlas_model_reconstruct_with(
+                    h,
+                    x,
+                    y,
+                    c_rule,
+                    buf.as_mut_ptr(),
+                    len,
+                    null_mut(),
+                )
+            };
+            assert_eq!(status, BrdfAtlasStatus::Ok);
+            assert_eq!(buf, blend.table().unwrap().raw());
+        }
+        let (mut v, mut w) = (f64::NAN, f64::NAN);
+        assert_eq!(
+            unsafe { brdf_atlas_model_confidence(h, x, y, &mut v, &mut w) },
+            BrdfAtlasStatus::Ok
+        );
+        let c = model.at(&[x, y]).unwrap().confidence();
+        assert_eq!((v, w), (c.variance, c.weight_sum));
+    }
+    // The GP rule gives the bits of the plain reconstruction.
+    let (mut a, mut b) = (vec![0.0f64; len], vec![1.0f64; len]);
+    unsafe {
+        brdf_atlas_model_reconstruct(h, 0.4, 0.1, a.as_mut_ptr(), len, null_mut());
+        brdf_atlas_model_reconstruct_with(
+            h,
+            0.4,
+            0.1,
+            BRDF_ATLAS_BLEND_GP,
+            b.as_mut_ptr(),
+            len,
+            null_mut(),
+        );
+    }
+    assert_eq!(a, b);
+    // An unknown rule is refused with its message.
+    let mut out = std::mem::MaybeUninit::<BrdfAtlasPlausibility>::zeroed();
+    let status = unsafe { brdf_atlas_model_plausibility(h, 0.0, 0.0, 7, out.as_mut_ptr()) };
+    assert_eq!(status, BrdfAtlasStatus::InvalidArgument);
+    let msg = unsafe { CStr::from_ptr(brdf_atlas_last_error_message()) }
+        .to_string_lossy()
+        .into_owned();
+    assert!(msg.contains("blend rule 7"), "{msg}");
+    unsafe { brdf_atlas_model_free(h) };
+}
