@@ -29,12 +29,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
-/// Leave-one-out errors of the GP, of convex blends at several length
-/// scales, and of the plausible rule towards each at several budgets.
+/// Leave-one-out errors of the GP, of the convex blend the plausible rule
+/// steps towards, for kernels of several length scales (each narrowed by
+/// `CONVEX_LENGTH_RATIO`), and of the plausible rule towards each at several
+/// budgets.
 fn leave_one_out(model: &Model) -> Result<(), Box<dyn std::error::Error>> {
     let (kernel, latent) = (model.file().kernel, model.latent().as_ref());
     let gp = loo::gp_predictor(&kernel, latent, true)?;
-    let scales = [1.0, 0.3, 0.15, 0.08];
+    let scales = [1.0, 0.5];
     let budgets = [5e-4, 1e-3, 1e-2];
     let mut predictors = vec![gp.clone()];
     let mut names = vec!["gp".to_string()];
@@ -53,11 +55,12 @@ fn leave_one_out(model: &Model) -> Result<(), Box<dyn std::error::Error>> {
             &NoProgress,
         )?;
         predictors.push(convex);
-        names.push(format!("convex l={l}"));
+        let lc = l * loo::CONVEX_LENGTH_RATIO;
+        names.push(format!("convex l={lc:.3}"));
         moved.push(0);
         for (b, (p, steps)) in budgets.iter().zip(rules) {
             predictors.push(p);
-            names.push(format!("plausible l={l} budget={}%", 100.0 * b));
+            names.push(format!("plausible l={lc:.3} budget={}%", 100.0 * b));
             moved.push(steps.iter().filter(|&&t| t > 0.0).count());
         }
     }

@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use brdf_atlas_core::loo::{CLAMP_BUDGET, STEPS};
+use brdf_atlas_core::loo::{CLAMP_BUDGET, CONVEX_LENGTH_RATIO, STEPS};
 use brdf_atlas_core::{BlendRule, FitOptions, GplvmParams, Model, NoProgress, Precision};
 use brdf_atlas_core::{TransformKind, fit_dir};
 use brdf_merl::directional::largest;
@@ -158,15 +158,26 @@ fn the_plausible_rule_keeps_the_clamp_within_budget_and_the_gp_where_it_already_
                 continue;
             }
             moved += 1;
-            // The weights lie on the segment to the convex blend at one of the steps.
-            let sum: f64 = gp.kernel().iter().sum();
-            let i = (0..gp.weights().len())
+            // The weights lie on the segment to the convex blend of the
+            // narrower kernel, at one of the steps.
+            let l = m.file().kernel.length_scale * CONVEX_LENGTH_RATIO;
+            let k: Vec<f64> = (0..m.names().len())
+                .map(|i| {
+                    let d2 = (0..2)
+                        .map(|c| (m.latent()[(i, c)] - x[c]).powi(2))
+                        .sum::<f64>();
+                    (-d2 / (2.0 * l * l)).exp()
+                })
+                .collect();
+            let sum: f64 = k.iter().sum();
+            let convex: Vec<f64> = k.iter().map(|v| v / sum).collect();
+            let i = (0..convex.len())
                 .max_by(|&a, &b| {
-                    let d = |j: usize| (gp.kernel()[j] / sum - gp.weights()[j]).abs();
+                    let d = |j: usize| (convex[j] - gp.weights()[j]).abs();
                     d(a).total_cmp(&d(b))
                 })
                 .unwrap();
-            let t = (pl.weights()[i] - gp.weights()[i]) / (gp.kernel()[i] / sum - gp.weights()[i]);
+            let t = (pl.weights()[i] - gp.weights()[i]) / (convex[i] - gp.weights()[i]);
             assert!(
                 STEPS.iter().any(|s| (s - t).abs() < 1e-9),
                 "{x:?}: step {t}"
@@ -183,8 +194,8 @@ fn the_plausible_rule_keeps_the_clamp_within_budget_and_the_gp_where_it_already_
                 let prev: Vec<f64> = gp
                     .weights()
                     .iter()
-                    .zip(gp.kernel())
-                    .map(|(w, kv)| (1.0 - STEPS[k - 1]) * w + STEPS[k - 1] * kv / sum)
+                    .zip(&convex)
+                    .map(|(w, v)| (1.0 - STEPS[k - 1]) * w + STEPS[k - 1] * v)
                     .collect();
                 assert!(
                     share(&prev) > CLAMP_BUDGET,

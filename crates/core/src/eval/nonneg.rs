@@ -17,15 +17,16 @@ use crate::data::store::{Rows, Store};
 use crate::error::{ParamError, Result};
 use crate::gplvm::kernel::{Kernel, rows_of};
 use crate::progress::Progress;
-use crate::query::budget::{Budget, counted};
+use crate::query::budget::{Budget, convex_weights, counted};
 use crate::simd::fold::{GROUPS, ordered_blocks};
 
 /// Rows of the store per block of the pass.
 const BLOCK: usize = 1024;
 
-/// The convex leave-one-out predictor: `V_ij = k(x_i, x_j) / sum_{l != i} k(x_i, x_l)`
-/// for `j != i`, `V_ii = 0` (a kernel-weighted average of the others; the
-/// nearest other alone if every kernel value underflows).
+/// The convex leave-one-out predictor of [`crate::BlendRule::Plausible`]:
+/// row `i` holds the convex weights at `x_i` of the other materials
+/// (`V_ii = 0`), with the kernel's length scale times
+/// [`crate::loo::CONVEX_LENGTH_RATIO`].
 pub fn convex_predictor(kernel: &Kernel, latent: MatRef<'_, f64>) -> Result<Mat<f64>> {
     let n = latent.nrows();
     if n < 2 {
@@ -37,26 +38,10 @@ pub fn convex_predictor(kernel: &Kernel, latent: MatRef<'_, f64>) -> Result<Mat<
         .into());
     }
     let pts = rows_of(latent);
-    let k = Mat::from_fn(n, n, |i, j| {
-        if i == j {
-            0.0
-        } else {
-            kernel.eval(&pts[i], &pts[j])
-        }
-    });
-    let dist2 =
-        |a: &[f64], b: &[f64]| -> f64 { a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum() };
-    Ok(Mat::from_fn(n, n, |i, j| {
-        let sum: f64 = (0..n).map(|l| k[(i, l)]).sum();
-        if sum > 0.0 {
-            k[(i, j)] / sum
-        } else {
-            let nearest = (0..n)
-                .filter(|&l| l != i)
-                .min_by(|&a, &b| dist2(&pts[i], &pts[a]).total_cmp(&dist2(&pts[i], &pts[b])));
-            f64::from(u8::from(Some(j) == nearest))
-        }
-    }))
+    let rows: Vec<Vec<f64>> = (0..n)
+        .map(|i| convex_weights(&pts, &pts[i], kernel.length_scale, Some(i)))
+        .collect();
+    Ok(Mat::from_fn(n, n, |i, j| rows[i][j]))
 }
 
 /// The leave-one-out predictors of [`crate::BlendRule::Plausible`], one per

@@ -30,6 +30,44 @@ pub const STEPS: [f64; 13] = [
     1.0,
 ];
 
+/// The length scale of the convex blend the rule steps towards, as a
+/// share of the GP kernel's: 0.3, the best of 1, 0.3, 0.15 and 0.08 for the
+/// rule's leave-one-out error on the 100 NBRDF-derived materials
+/// (docs/plausibility.md).
+pub const CONVEX_LENGTH_RATIO: f64 = 0.3;
+
+/// The convex weights at `x`: `exp(-|x - x_i|^2 / (2 l^2)) / sum`, with
+/// `l` the kernel's length scale times [`CONVEX_LENGTH_RATIO`], computed
+/// relative to the nearest material so they never underflow (far from the
+/// data they tend to the nearest material alone). Material `skip` (if any)
+/// gets weight 0, as in leave-one-out.
+pub(crate) fn convex_weights(
+    latent: &[Vec<f64>],
+    x: &[f64],
+    length_scale: f64,
+    skip: Option<usize>,
+) -> Vec<f64> {
+    let l = length_scale * CONVEX_LENGTH_RATIO;
+    let d2: Vec<f64> = latent
+        .iter()
+        .enumerate()
+        .map(|(i, xi)| {
+            if Some(i) == skip {
+                f64::INFINITY
+            } else {
+                xi.iter().zip(x).map(|(a, b)| (a - b) * (a - b)).sum()
+            }
+        })
+        .collect();
+    let nearest = d2.iter().copied().fold(f64::INFINITY, f64::min);
+    let k: Vec<f64> = d2
+        .iter()
+        .map(|d| (-(d - nearest) / (2.0 * l * l)).exp())
+        .collect();
+    let sum: f64 = k.iter().sum();
+    k.iter().map(|v| v / sum).collect()
+}
+
 /// The share of a blend's cosine-weighted reflectance that the clamp may
 /// remove before the weights are moved: 0.05%.
 pub const CLAMP_BUDGET: f64 = 5e-4;

@@ -23,7 +23,7 @@ use serde::Serialize;
 use crate::data::transform::InverseForm;
 use crate::error::Result;
 use crate::model::Model;
-use crate::query::budget::{Budget, CLAMP_BUDGET, counted};
+use crate::query::budget::{Budget, CLAMP_BUDGET, convex_weights, counted};
 use crate::query::reconstruct::Blend;
 
 /// Rows a worker handles at once (fixed, so sums do not depend on the thread count).
@@ -43,7 +43,8 @@ pub enum BlendRule {
     /// go negative; the inverse transform then clamps it.
     #[default]
     Gp,
-    /// `w' = (1 - t) w + t k / sum(k)` with the smallest `t` of
+    /// `w' = (1 - t) w + t v`, `v` the convex weights of a narrower kernel
+    /// ([`crate::loo::CONVEX_LENGTH_RATIO`]), with the smallest `t` of
     /// [`crate::loo::STEPS`] for which the clamp removes at most
     /// [`crate::loo::CLAMP_BUDGET`] of the blend's cosine-weighted
     /// reflectance: the GP's weights wherever they are plausible, and the
@@ -119,12 +120,8 @@ impl Model {
         match rule {
             BlendRule::Gp => Ok(blend),
             BlendRule::Plausible => {
-                let sum: f64 = blend.kernel().iter().sum();
-                if sum.is_nan() || sum <= 0.0 {
-                    // Underflowed kernel: the GP blend is the mean, plausible as it is.
-                    return Ok(blend);
-                }
-                let convex: Vec<f64> = blend.kernel().iter().map(|k| k / sum).collect();
+                let latent = crate::gplvm::kernel::rows_of(self.latent().as_ref());
+                let convex = convex_weights(&latent, x, self.file().kernel.length_scale, None);
                 let t = self.plausible_step(blend.weights(), &convex)?;
                 if t == 0.0 {
                     return Ok(blend);
