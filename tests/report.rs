@@ -66,9 +66,10 @@ fn report_writes_every_file_and_fails_atomically() {
             .unwrap_or_else(|e| panic!("{png}: {e}"));
         assert_eq!((reader.info().width, reader.info().height), (720, 440));
     }
-    // CSV tables: q = 1..3, two transforms, GPLVM, its L-BFGS twin and PCA.
+    // CSV tables: q = 1..3, two transforms, GPLVM, its L-BFGS twin, the
+    // plausible rule at q = 2 and PCA.
     let loo = std::fs::read_to_string(rep.join("loo.csv")).unwrap();
-    assert_eq!(loo.lines().count(), 1 + 2 * (3 + 1 + 3), "{loo}");
+    assert_eq!(loo.lines().count(), 1 + 2 * (3 + 1 + 1 + 3), "{loo}");
     for line in loo.lines().skip(1) {
         let cols: Vec<&str> = line.split(',').collect();
         for v in &cols[3..6] {
@@ -77,7 +78,33 @@ fn report_writes_every_file_and_fails_atomically() {
         }
     }
     let per = std::fs::read_to_string(rep.join("loo-materials.csv")).unwrap();
-    assert_eq!(per.lines().count(), 1 + 2 * 7 * 6);
+    assert_eq!(per.lines().count(), 1 + 2 * 8 * 6);
+    // Plausibility: a 3 x 3 grid, two transforms, two rules; the plausible
+    // rule never clamps more than the GP at the same point.
+    assert!(md.contains("## Plausibility") && md.contains("(plausibility.png)"));
+    let pl = std::fs::read_to_string(rep.join("plausibility.csv")).unwrap();
+    let rows: Vec<Vec<String>> = pl
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    assert_eq!(rows.len(), 2 * 2 * 9, "{pl}");
+    for r in &rows {
+        let clamped: f64 = r[4].parse().unwrap();
+        assert!((0.0..=1.0).contains(&clamped), "{r:?}");
+        if r[1] == "plausible" {
+            let gp = rows
+                .iter()
+                .find(|g| g[0] == r[0] && g[1] == "gp" && g[2] == r[2] && g[3] == r[3])
+                .unwrap();
+            let gp_clamped: f64 = gp[4].parse().unwrap();
+            assert!(clamped <= gp_clamped * (1.0 + 1e-9) + 1e-15, "{r:?} vs {gp:?}");
+        }
+    }
+    let file = std::fs::File::open(rep.join("plausibility.png")).unwrap();
+    png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .expect("plausibility.png decodes");
     for csv in [
         "fits.csv",
         "stores.csv",

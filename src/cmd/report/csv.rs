@@ -28,7 +28,7 @@ fn row(cells: &[&dyn Display]) -> String {
 }
 
 /// Full precision, scientific: `1.25e-3`.
-fn e(v: f64) -> String {
+pub(super) fn e(v: f64) -> String {
     format!("{v:e}")
 }
 

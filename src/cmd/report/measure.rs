@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 use brdf_atlas_core::ModelFile;
 use brdf_atlas_core::loo::{self, Evaluation};
 use brdf_atlas_core::measure::{map_error, reference_albedo};
-use brdf_atlas_core::{AlbedoMethod, DEFAULT_SAMPLES, View};
+use brdf_atlas_core::{AlbedoMethod, BlendRule, DEFAULT_SAMPLES, View};
 use brdf_atlas_core::{Dataset, build_store};
 use brdf_atlas_core::{
     Fit, GplvmParams, GramData, Model, NoProgress, OptimizerKind, Precision, Store, TransformKind,
@@ -88,6 +88,17 @@ pub struct SizeRow {
     pub time: Duration,
 }
 
+/// One latent point of the plausibility grid under one blend rule.
+pub struct PlausibilityRow {
+    pub transform: TransformKind,
+    pub rule: BlendRule,
+    pub x: [f64; 2],
+    pub clamped_reflectance: f64,
+    pub clamped_values: f64,
+    pub max_albedo: f64,
+    pub variance: f64,
+}
+
 /// Everything measured.
 #[derive(Default)]
 pub struct Results {
@@ -111,6 +122,9 @@ pub struct Results {
     pub reference_time: Duration,
     pub reference_pixels: usize,
     pub sizes: Vec<SizeRow>,
+    /// The plausibility grid of each transform's q = 2 model, row by row
+    /// from the top, under each rule.
+    pub plausibility: Vec<PlausibilityRow>,
 }
 
 impl Results {
@@ -186,6 +200,47 @@ pub fn measure(
         map_samples(log_model, plan, r)?;
         steps.say("albedo map: size vs time")?;
         map_sizes(log_model, raw_model, plan, r)?;
+        steps.say(&format!(
+            "plausibility at {0} x {0} points of the map, both transforms, both blend rules",
+            plan.plausibility_grid
+        ))?;
+        plausibility(log_model, TransformKind::Log, plan.plausibility_grid, r)?;
+        plausibility(raw_model, TransformKind::Raw, plan.plausibility_grid, r)?;
+    }
+    Ok(())
+}
+
+/// The centres of a `grid x grid` partition of the map's default view, row
+/// by row from the top.
+pub fn grid_points(grid: usize) -> Vec<[f64; 2]> {
+    let v = View::default();
+    let at = |k: usize, a: f64, b: f64| a + (b - a) * (k as f64 + 0.5) / grid as f64;
+    (0..grid)
+        .flat_map(|j| (0..grid).map(move |i| [at(i, v.x0, v.x1), at(grid - 1 - j, v.y0, v.y1)]))
+        .collect()
+}
+
+/// `model` (of `transform`) at the grid's points under both blend rules.
+fn plausibility(
+    model: &Model,
+    transform: TransformKind,
+    grid: usize,
+    r: &mut Results,
+) -> Result<(), Error> {
+    for rule in [BlendRule::Gp, BlendRule::Plausible] {
+        for x in grid_points(grid) {
+            let blend = model.at_with(&x, rule)?;
+            let p = blend.plausibility()?;
+            r.plausibility.push(PlausibilityRow {
+                transform,
+                rule,
+                x,
+                clamped_reflectance: p.clamped_reflectance,
+                clamped_values: p.clamped_values,
+                max_albedo: p.max_albedo,
+                variance: blend.confidence().variance,
+            });
+        }
     }
     Ok(())
 }
@@ -226,6 +281,24 @@ fn per_transform(
         if q == 2 && optimizer == OptimizerKind::HookeJeeves {
             kept = Some(fit);
         }
+    }
+    if let Some(fit) = &kept {
+        steps.say(&format!(
+            "{name} transform: the plausible rule's steps, held out"
+        ))?;
+        let (latent, kernel) = (fit.outcome.latent.as_ref(), &fit.kernel);
+        let gp = loo::gp_predictor(kernel, latent, true)?;
+        let convex = loo::convex_predictor(kernel, latent)?;
+        let bars = Bars::new("plausible steps");
+        let mut rules = loo::plausible_predictors(
+            &store,
+            gp.as_ref(),
+            convex.as_ref(),
+            &[loo::CLAMP_BUDGET],
+            &bars,
+        )?;
+        predictors.push(rules.remove(0).0);
+        labels.push(("gplvm-plausible", 2));
     }
     for q in 1..=plan.q_max {
         predictors.push(loo::pca_predictor(y.as_ref(), q)?);

@@ -14,6 +14,7 @@ mod csv;
 mod markdown;
 mod measure;
 mod plan;
+mod plausible;
 mod plot;
 
 use std::fs::File;
@@ -130,7 +131,9 @@ pub fn write(args: &Args, say: &mut dyn Write) -> Result<Summary, Error> {
     steps.say("writing tables and plots")?;
     let dir = staged.path();
     csv::write_all(dir, &r)?;
+    plausible::csv(dir, &r)?;
     plot::all(dir, &r)?;
+    plausible::picture(dir, &r, plan.plausibility_grid)?;
     let total = start.elapsed();
     let load_end = machine::load_average();
     write_file(&dir.join("report.md"), |w| {

@@ -38,6 +38,8 @@ pub struct Plan {
     pub points: usize,
     /// Time short runs three times and keep the median.
     pub repeat: bool,
+    /// Points per side of the plausibility grid.
+    pub plausibility_grid: usize,
 }
 
 impl Plan {
@@ -64,6 +66,7 @@ impl Plan {
                 timed_size: 128,
                 points: 2,
                 repeat: false,
+                plausibility_grid: 3,
             }
         } else {
             Plan {
@@ -76,6 +79,7 @@ impl Plan {
                 timed_size: 256,
                 points: 4,
                 repeat: true,
+                plausibility_grid: 10,
             }
         }
     }
