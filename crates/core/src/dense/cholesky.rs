@@ -10,6 +10,7 @@
 
 use faer::{Mat, MatRef};
 
+use super::gram::syrk_lower_add;
 use crate::simd::dot::{axpy, dot};
 
 /// `L` of `K = L L^T`, by rows.
@@ -135,8 +136,10 @@ impl Cholesky {
     /// `K^-1` into `out` (`n x n`, exactly symmetric, so row- and
     /// column-major alike), with `scratch` for `L^-1` (resized as needed).
     ///
-    /// `M = L^-1` by rows (`L[i][i] M[i] = e_i - sum_{k<i} L[i][k] M[k]`),
-    /// then `K^-1 = M^T M = sum_k M[k]^T M[k]`, row updates in `k` order.
+    /// `M = L^-1` column by column (forward substitution of `e_j`, dot
+    /// products along rows of `L`), then `K^-1 = M^T M`, whose entries are
+    /// the inner products of `M`'s columns: the Gram kernel
+    /// ([`syrk_lower_add`]) on `M` stored column-major.
     ///
     /// # Panics
     /// When `out` is not `n x n` (a caller bug).
@@ -145,30 +148,22 @@ impl Cholesky {
         assert_eq!(out.len(), n * n);
         scratch.clear();
         scratch.resize(n * n, 0.0);
-        let m = scratch;
-        for i in 0..n {
-            let (done, row) = m.split_at_mut(i * n);
-            let li = &self.l[i * n..i * n + i + 1];
-            let row = &mut row[..=i];
-            for (k, lik) in li[..i].iter().enumerate() {
-                axpy(-lik, &done[k * n..k * n + k + 1], &mut row[..=k]);
+        for (j, col) in scratch.chunks_exact_mut(n).enumerate() {
+            // Column j of M is zero above row j.
+            col[j] = 1.0 / self.l[j * n + j];
+            for i in j + 1..n {
+                let row = &self.l[i * n..i * n + i + 1];
+                col[i] = -dot(&row[j..i], &col[j..i]) / row[i];
             }
-            row[i] = 1.0;
-            let d = li[i];
-            row.iter_mut().for_each(|v| *v /= d);
         }
         out.iter_mut().for_each(|v| *v = 0.0);
-        for k in 0..n {
-            let mk = &m[k * n..k * n + k + 1];
-            for (j, mkj) in mk.iter().enumerate() {
-                // Row j of the upper triangle, columns j..=k.
-                axpy(*mkj, &mk[j..], &mut out[j * n + j..j * n + k + 1]);
-            }
+        if n > 0 {
+            syrk_lower_add(scratch, n, out);
         }
-        // Mirror the upper triangle (row j, columns j..) into the lower.
+        // Mirror the lower triangle (column-major) into the upper.
         for j in 0..n {
-            for i in 0..j {
-                out[j * n + i] = out[i * n + j];
+            for i in j + 1..n {
+                out[i * n + j] = out[j * n + i];
             }
         }
     }
