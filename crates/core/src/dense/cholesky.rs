@@ -10,7 +10,7 @@
 
 use faer::{Mat, MatRef};
 
-use super::gram::syrk_lower_add;
+use super::gram::syrk_lower_add_triangular;
 use crate::simd::dot::{axpy, dot};
 
 /// `L` of `K = L L^T`, by rows.
@@ -139,7 +139,7 @@ impl Cholesky {
     /// `M = L^-1` column by column (forward substitution of `e_j`, dot
     /// products along rows of `L`), then `K^-1 = M^T M`, whose entries are
     /// the inner products of `M`'s columns: the Gram kernel
-    /// ([`syrk_lower_add`]) on `M` stored column-major.
+    /// ([`syrk_lower_add_triangular`]) on `M` stored column-major.
     ///
     /// # Panics
     /// When `out` is not `n x n` (a caller bug).
@@ -158,7 +158,7 @@ impl Cholesky {
         }
         out.iter_mut().for_each(|v| *v = 0.0);
         if n > 0 {
-            syrk_lower_add(scratch, n, out);
+            syrk_lower_add_triangular(scratch, n, out);
         }
         // Mirror the lower triangle (column-major) into the upper.
         for j in 0..n {
