@@ -36,7 +36,7 @@ fn syrk(block: &[f64], len: usize, acc: &mut [f64], triangular: bool) {
     if block.is_empty() {
         return;
     }
-    assert!(len > 0 && block.len() % len == 0);
+    assert!(len > 0 && block.len().is_multiple_of(len));
     let n = block.len() / len;
     assert_eq!(acc.len(), n * n);
     #[cfg(target_arch = "x86_64")]

@@ -18,7 +18,7 @@ pub fn matmul(c: &mut [f64], a: &[f64], b: &[f64], k: usize) {
         c.iter_mut().for_each(|v| *v = 0.0);
         return;
     }
-    assert!(a.len() % k == 0 && b.len() % k == 0);
+    assert!(a.len().is_multiple_of(k) && b.len().is_multiple_of(k));
     let (m, p) = (a.len() / k, b.len() / k);
     assert_eq!(c.len(), m * p);
     let (m8, p4) = (m / 8 * 8, p / 4 * 4);

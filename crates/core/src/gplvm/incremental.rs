@@ -609,7 +609,7 @@ mod tests {
                 "trial {k}: {} vs {want}",
                 t.delta
             );
-            if rng.next_u64() % 3 == 0 {
+            if rng.next_u64().is_multiple_of(3) {
                 s.accept(t).unwrap();
                 let m = s.inverse();
                 assert!((0..30).all(|r| (0..30).all(|c| m[(r, c)] == m[(c, r)])));
