@@ -98,7 +98,10 @@ fn report_writes_every_file_and_fails_atomically() {
                 .find(|g| g[0] == r[0] && g[1] == "gp" && g[2] == r[2] && g[3] == r[3])
                 .unwrap();
             let gp_clamped: f64 = gp[4].parse().unwrap();
-            assert!(clamped <= gp_clamped * (1.0 + 1e-9) + 1e-15, "{r:?} vs {gp:?}");
+            assert!(
+                clamped <= gp_clamped * (1.0 + 1e-9) + 1e-15,
+                "{r:?} vs {gp:?}"
+            );
         }
     }
     let file = std::fs::File::open(rep.join("plausibility.png")).unwrap();

@@ -198,11 +198,16 @@ pub fn write_summary(out: &mut impl Write, args: &Args, fitted: &Fitted) -> io::
         "  numerics   {} rank-one updates, {} refactorisations, {} dense fallbacks, max drift {:.1e} (cost), {:.1e} (K^-1)",
         d.updates, d.refreshes, d.dense_fallbacks, d.max_cost_drift, d.max_inverse_drift
     )?;
-    if let Some(peak) = r.peak_heap {
+    let heap = r.peak_heap.map(|p| format!("peak heap {}", size(p as u64)));
+    let private = r
+        .peak_private
+        .map(|p| format!("peak private {} (VmData)", size(p)));
+    let parts: Vec<String> = heap.into_iter().chain(private).collect();
+    if !parts.is_empty() {
         writeln!(
             out,
-            "  memory     peak heap {} (the inputs and the store are memory-mapped files, not heap)",
-            size(peak as u64)
+            "  memory     {} (the inputs and the store are memory-mapped files, in neither)",
+            parts.join(", ")
         )?;
     }
     let total = r.scan_time + r.store_time + r.optimise_time + r.save_time;

@@ -31,6 +31,7 @@
 #![warn(missing_docs)]
 
 mod data;
+pub mod dense;
 mod error;
 mod eval;
 mod gplvm;

@@ -31,8 +31,9 @@
 //! eigenvalues of `Y` ([`discarded`]); it is not a held-out error.
 
 use brdf_merl::Dims;
-use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, MatRef, Par};
+use faer::Mat;
+
+use crate::dense::product::matmul;
 
 use crate::data::store::{Rows, Store};
 use crate::data::transform::{InverseForm, Transform, TransformKind};
@@ -127,7 +128,11 @@ pub fn evaluate(
     }
     let mn = count * n;
     // All predictors stacked: row m * N + i predicts material i by method m.
-    let stacked = Mat::from_fn(mn, n, |r, j| predictors[r / n][(r % n, j)]);
+    // Column-major mn x n.
+    let stacked: Vec<f64> = (0..n)
+        .flat_map(|j| (0..mn).map(move |r| (r, j)))
+        .map(|(r, j)| predictors[r / n][(r % n, j)])
+        .collect();
     let dims = store.dims();
     let bins = dims.bins();
     let rows = store.rows();
@@ -181,9 +186,8 @@ pub fn evaluate(
                     .for_each(|(o, v)| *o = *v as f64),
                 Rows::F64(s) => z.copy_from_slice(&s[r0 * n..r1 * n]),
             }
-            let zc = MatRef::from_column_major_slice(z, n, len);
-            let o = faer::MatMut::from_column_major_slice_mut(&mut g.out[..len * mn], mn, len);
-            matmul(o, Accum::Replace, stacked.as_ref(), zc, 1.0, Par::Seq);
+            // Bin-major rows are the columns of an n x len matrix.
+            matmul(&mut g.out[..len * mn], &stacked, z, n);
             g.scored += score_block(&scoring, r0, z, &g.out[..len * mn], &mut g.sums, &mut g.row);
             progress.advance(len as u64);
         },
@@ -380,6 +384,7 @@ mod tests {
     use crate::gplvm::kernel::Kernel;
     use crate::progress::NoProgress;
     use brdf_merl::synth::{SplitMix64, database};
+    use faer::MatRef;
     use faer::Side;
     use faer::linalg::solvers::Solve;
 

@@ -10,10 +10,10 @@
 //! convex value `c`, and where `g < 0` the clamped part of
 //! `g + t (c - g)` for each `t`.
 
-use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, MatRef, Par};
+use faer::{Mat, MatRef};
 
 use crate::data::store::{Rows, Store};
+use crate::dense::product::matmul;
 use crate::error::{ParamError, Result};
 use crate::gplvm::kernel::{Kernel, rows_of};
 use crate::progress::Progress;
@@ -67,13 +67,18 @@ pub fn plausible_predictors(
             .into());
         }
     }
-    let stacked = Mat::from_fn(2 * n, n, |r, j| {
-        if r < n {
-            gp[(r, j)]
-        } else {
-            convex[(r - n, j)]
-        }
-    });
+    // Column-major 2N x N: rows 0..N the GP predictor, N..2N the convex one.
+    let stacked: Vec<f64> = (0..n)
+        .flat_map(|j| {
+            (0..2 * n).map(move |r| {
+                if r < n {
+                    gp[(r, j)]
+                } else {
+                    convex[(r - n, j)]
+                }
+            })
+        })
+        .collect();
     let dims = store.dims();
     let transform = store.transform().build(dims);
     let cos = crate::data::transform::cosine_products(dims);
@@ -100,9 +105,8 @@ pub fn plausible_predictors(
                     .for_each(|(o, v)| *o = *v as f64),
                 Rows::F64(s) => z.copy_from_slice(&s[r0 * n..r1 * n]),
             }
-            let zc = MatRef::from_column_major_slice(z, n, len);
-            let o = faer::MatMut::from_column_major_slice_mut(&mut out[..len * 2 * n], 2 * n, len);
-            matmul(o, Accum::Replace, stacked.as_ref(), zc, 1.0, Par::Seq);
+            // Bin-major rows are the columns of an n x len matrix.
+            matmul(&mut out[..len * 2 * n], &stacked, z, n);
             for k in 0..len {
                 let row = r0 + k;
                 let Some(form) = counted(store, transform.as_ref(), row) else {

@@ -3,7 +3,9 @@
 //! z_j`), for the GPLVM held out and for PCA held out and in sample. The
 //! mathematics is in [`super::loo`]'s documentation.
 
-use faer::{Mat, MatRef, Side};
+use faer::{Mat, MatRef};
+
+use crate::dense::symmetric_eigen;
 
 use crate::error::{CoreError, ParamError, Result};
 use crate::gplvm::kernel::Kernel;
@@ -42,11 +44,7 @@ pub fn gp_predictor(
 /// symmetric matrix.
 pub(super) fn eigen_desc(y: MatRef<'_, f64>) -> Result<(Vec<f64>, Mat<f64>)> {
     let n = y.nrows();
-    let evd = y
-        .self_adjoint_eigen(Side::Lower)
-        .map_err(|_| CoreError::Eigen("the Gram matrix"))?;
-    let s = evd.S().column_vector();
-    let u = evd.U();
+    let (s, u) = symmetric_eigen(y).ok_or(CoreError::Eigen("the Gram matrix"))?;
     let vals = (0..n).rev().map(|k| s[k]).collect();
     let vecs = Mat::from_fn(n, n, |i, k| u[(i, n - 1 - k)]);
     Ok((vals, vecs))

@@ -36,9 +36,9 @@
 //! `K` lose about `cond(K) eps` a move and refactorise often; the small steps
 //! of a converging search refactorise rarely.
 
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::cholesky::llt;
-use faer::{Mat, MatRef, Par};
+use faer::{Mat, MatRef};
+
+use crate::dense::Cholesky;
 
 use crate::error::{CoreError, Result};
 use crate::gplvm::kernel::Kernel;
@@ -133,57 +133,31 @@ fn vdot(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// [`factor`]'s Cholesky and inverse (the same calls, so the same bits)
-/// into buffers kept from one refactorisation to the next, the inverse
-/// mirrored within the state's own layout.
+/// into buffers kept from one refactorisation to the next.
 struct Factoriser {
-    l: Mat<f64>,
-    inv: Mat<f64>,
-    mem: MemBuffer,
+    l: Cholesky,
+    scratch: Vec<f64>,
 }
 
 impl Factoriser {
     fn new(n: usize) -> Factoriser {
         Factoriser {
-            l: Mat::zeros(n, n),
-            inv: Mat::zeros(n, n),
-            mem: MemBuffer::new(
-                llt::factor::cholesky_in_place_scratch::<f64>(n, Par::Seq, Default::default())
-                    .or(llt::inverse::inverse_scratch::<f64>(n, Par::Seq)),
-            ),
+            l: Cholesky::with_size(n),
+            scratch: Vec::with_capacity(n * n),
         }
     }
 
     /// `log|K|`, and `K^-1` into `out` (column-major, exactly symmetric);
     /// `None` if `K` (column-major `n x n`) is not numerically positive definite.
     fn inverse(&mut self, k: &[f64], out: &mut Vec<f64>) -> Option<f64> {
-        let n = self.l.nrows();
-        self.l.copy_from(MatRef::from_column_major_slice(k, n, n));
-        llt::factor::cholesky_in_place(
-            self.l.as_mut(),
-            Default::default(),
-            Par::Seq,
-            MemStack::new(&mut self.mem),
-            Default::default(),
-        )
-        .ok()?;
-        let logdet = 2.0 * (0..n).map(|i| self.l[(i, i)].ln()).sum::<f64>();
+        let n = self.l.n();
+        self.l.factor_into(k).ok()?;
+        let logdet = self.l.log_det();
         if !logdet.is_finite() {
             return None;
         }
-        // `inverse` reads the lower triangle of `l` and writes the lower triangle of `inv`.
-        llt::inverse::inverse(
-            self.inv.as_mut(),
-            self.l.as_ref(),
-            Par::Seq,
-            MemStack::new(&mut self.mem),
-        );
-        copy_columns(&self.inv, out);
-        for c in 1..n {
-            let (left, right) = out.split_at_mut(c * n);
-            for (r, v) in right[..c].iter_mut().enumerate() {
-                *v = left[r * n + c];
-            }
-        }
+        out.resize(n * n, 0.0);
+        self.l.inverse_into(out, &mut self.scratch);
         Some(logdet)
     }
 }
@@ -635,7 +609,7 @@ mod tests {
                 "trial {k}: {} vs {want}",
                 t.delta
             );
-            if rng.next_u64() % 3 == 0 {
+            if rng.next_u64().is_multiple_of(3) {
                 s.accept(t).unwrap();
                 let m = s.inverse();
                 assert!((0..30).all(|r| (0..30).all(|c| m[(r, c)] == m[(c, r)])));

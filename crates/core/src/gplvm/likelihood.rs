@@ -10,9 +10,9 @@
 //! (`k(x)^T K^-1 Z`) is invariant to this scale, so only the fit sees it; the
 //! noise `mu` is then relative to the data's variance.
 
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::cholesky::llt;
-use faer::{Mat, MatRef, Par};
+use faer::{Mat, MatRef};
+
+use crate::dense::Cholesky;
 
 use crate::error::{CoreError, ParamError, Result};
 use crate::gplvm::kernel::Kernel;
@@ -76,46 +76,21 @@ impl GramData {
 
 /// `(log|K|, K^-1)` from a Cholesky factorisation; a typed error if `K` is not SPD.
 ///
-/// Sequential on purpose: `K` is small (`N x N`, N about 100), where thread
-/// hand-offs cost more than the arithmetic, this runs thousands of times in
-/// a fit, and a sequential factorisation gives the same bits on any machine
-/// load and thread count.
+/// Sequential on purpose ([`Cholesky`]): `K` is small (`N x N`, N about
+/// 100), where thread hand-offs cost more than the arithmetic, this runs
+/// thousands of times in a fit, and a sequential factorisation gives the
+/// same bits on any machine load and thread count.
 pub fn factor(k: MatRef<'_, f64>, context: &str) -> Result<(f64, Mat<f64>)> {
-    let n = k.nrows();
-    let par = Par::Seq;
     let not_spd = |pivot| CoreError::NotPositiveDefinite {
         context: context.to_string(),
         pivot,
     };
-    let mut mem = MemBuffer::new(
-        llt::factor::cholesky_in_place_scratch::<f64>(n, par, Default::default())
-            .or(llt::inverse::inverse_scratch::<f64>(n, par)),
-    );
-    let stack = MemStack::new(&mut mem);
-    let mut l = k.to_owned();
-    llt::factor::cholesky_in_place(
-        l.as_mut(),
-        Default::default(),
-        par,
-        stack,
-        Default::default(),
-    )
-    .map_err(|e| match e {
-        llt::factor::LltError::NonPositivePivot { index } => not_spd(Some(index)),
-    })?;
-    let logdet = 2.0 * (0..n).map(|i| l[(i, i)].ln()).sum::<f64>();
+    let l = Cholesky::factor(k).map_err(|e| not_spd(Some(e.index)))?;
+    let logdet = l.log_det();
     if !logdet.is_finite() {
         return Err(not_spd(None));
     }
-    // `inverse` reads the lower triangle of `l` and writes the lower triangle of `inv`.
-    let mut inv = Mat::<f64>::zeros(n, n);
-    llt::inverse::inverse(inv.as_mut(), l.as_ref(), par, stack);
-    for j in 0..n {
-        for i in 0..j {
-            inv[(i, j)] = inv[(j, i)];
-        }
-    }
-    Ok((logdet, inv))
+    Ok((logdet, l.inverse()))
 }
 
 /// `tr(A B)` for symmetric `A`, `B`: the sum of their elementwise product.

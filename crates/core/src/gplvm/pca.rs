@@ -7,7 +7,9 @@
 //! magnitude 1, inside the box `[-1, 1]^q`. Eigenvector signs are fixed
 //! (largest-magnitude entry positive) so the start is deterministic.
 
-use faer::{Mat, MatRef, Side};
+use faer::{Mat, MatRef};
+
+use crate::dense::symmetric_eigen;
 
 use crate::error::{CoreError, ParamError, Result};
 
@@ -17,11 +19,7 @@ pub fn dual_pca(y: MatRef<'_, f64>, q: usize) -> Result<(Mat<f64>, Vec<f64>)> {
     if q == 0 || q >= n.max(1) {
         return Err(ParamError::LatentDimForData { q, n }.into());
     }
-    let evd = y
-        .self_adjoint_eigen(Side::Lower)
-        .map_err(|_| CoreError::Eigen("the Gram matrix"))?;
-    let s = evd.S().column_vector();
-    let u = evd.U();
+    let (s, u) = symmetric_eigen(y).ok_or(CoreError::Eigen("the Gram matrix"))?;
     let eigenvalues: Vec<f64> = (0..n).rev().map(|k| s[k]).collect();
     let mut x = Mat::<f64>::zeros(n, q);
     for c in 0..q {

@@ -2,6 +2,8 @@
 //! out, each put in place only when both are complete.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use brdf_atomic::{Swapped, stage, swap_in};
@@ -49,6 +51,10 @@ pub struct FitReport {
     /// ([`crate::heap::Counting`]); the inputs and the store are mapped
     /// files, not heap.
     pub peak_heap: Option<usize>,
+    /// Largest private memory of the process ([`crate::heap::private`],
+    /// `VmData`) during the fit, sampled every 5 ms and at the end; `None`
+    /// where the system does not report it.
+    pub peak_private: Option<u64>,
 }
 
 /// Fit a directory of MERL files and write `model` and `model.store`.
@@ -60,6 +66,8 @@ pub fn fit_dir(
 ) -> Result<FitReport> {
     let t0 = Instant::now();
     crate::heap::reset_peak();
+    let private = PrivatePeak::default();
+    private.start();
     let data = Dataset::map_dir(dir)?;
     let scan_time = t0.elapsed();
     let t1 = Instant::now();
@@ -76,6 +84,7 @@ pub fn fit_dir(
         &staging,
         scan_time,
         t1,
+        &private,
     );
     if result.is_err() {
         let _ = std::fs::remove_file(&staging);
@@ -104,6 +113,7 @@ fn fit_staged(
     staging: &Path,
     scan_time: Duration,
     t1: Instant,
+    private: &PrivatePeak,
 ) -> Result<FitReport> {
     let (store, y) = build_store(
         data,
@@ -180,5 +190,52 @@ fn fit_staged(
         optimise_time,
         save_time,
         peak_heap: crate::heap::peak(),
+        peak_private: private.peak(),
     })
+}
+
+/// The process's largest private memory ([`crate::heap::private`]) while
+/// it is alive: a thread samples it every [`PrivatePeak::PERIOD`].
+#[derive(Default)]
+struct PrivatePeak {
+    /// Bytes, 0 before the first sample.
+    peak: Arc<AtomicU64>,
+    stop: Arc<AtomicBool>,
+}
+
+impl PrivatePeak {
+    const PERIOD: Duration = Duration::from_millis(5);
+
+    /// Start sampling (if the system reports private memory).
+    fn start(&self) {
+        let Some(first) = crate::heap::private() else {
+            return;
+        };
+        self.peak.store(first, Ordering::Relaxed);
+        let (peak, stop) = (self.peak.clone(), self.stop.clone());
+        // Without a thread, one sample here and one at the end.
+        let _ = std::thread::Builder::new()
+            .name("memory sampler".into())
+            .stack_size(64 << 10)
+            .spawn(move || {
+                while !stop.load(Ordering::Relaxed) {
+                    if let Some(now) = crate::heap::private() {
+                        peak.fetch_max(now, Ordering::Relaxed);
+                    }
+                    std::thread::sleep(PrivatePeak::PERIOD);
+                }
+            });
+    }
+
+    /// The largest sample, with one taken now.
+    fn peak(&self) -> Option<u64> {
+        let now = crate::heap::private()?;
+        Some(self.peak.fetch_max(now, Ordering::Relaxed).max(now))
+    }
+}
+
+impl Drop for PrivatePeak {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+    }
 }

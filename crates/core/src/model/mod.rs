@@ -13,11 +13,11 @@ use std::sync::OnceLock;
 
 use brdf_merl::albedo::Quadrature;
 use brdf_merl::{Dims, DirectionalRule};
-use faer::linalg::solvers::Solve;
-use faer::{Mat, Side};
+use faer::Mat;
 
 use crate::data::Store;
 use crate::data::transform::Transform;
+use crate::dense::Cholesky;
 use crate::error::{CoreError, Result};
 
 pub mod file;
@@ -32,7 +32,7 @@ pub struct Model {
     file: ModelFile,
     store: Store,
     latent: Mat<f64>,
-    llt: faer::linalg::solvers::Llt<f64>,
+    llt: Cholesky,
     transform: Box<dyn Transform>,
     gram: Mat<f64>,
     /// What every map of this model shares, built on first use.
@@ -109,18 +109,12 @@ impl Model {
         let (n, q, dims) = (file.names.len(), file.latent[0].len(), store.dims());
         let gram = Mat::from_fn(n, n, |i, j| file.gram[i][j]);
         let latent = Mat::from_fn(n, q, |i, c| file.latent[i][c]);
-        let llt = file
-            .kernel
-            .matrix(latent.as_ref())
-            .llt(Side::Lower)
-            .map_err(|e| CoreError::NotPositiveDefinite {
+        let llt = Cholesky::factor(file.kernel.matrix(latent.as_ref()).as_ref()).map_err(|e| {
+            CoreError::NotPositiveDefinite {
                 context: format!("opening {}", path.display()),
-                pivot: match e {
-                    faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } => {
-                        Some(index)
-                    }
-                },
-            })?;
+                pivot: Some(e.index),
+            }
+        })?;
         let transform = file.transform.build(dims);
         Ok(Model {
             path,
@@ -173,7 +167,7 @@ impl Model {
 
     /// `K^-1 B` for a right-hand side with `N` rows.
     pub fn llt_solve(&self, b: &Mat<f64>) -> Mat<f64> {
-        self.llt.solve(b)
+        self.llt.solve(b.as_ref())
     }
 
     /// The Gram matrix `Y = Z Z^T` of the stored (centred, transformed) data.
@@ -195,9 +189,9 @@ impl Model {
             )));
         }
         let k = self.file.kernel.vector(self.latent.as_ref(), x);
-        let col = faer::Col::from_fn(k.len(), |i| k[i]);
-        let w = self.llt.solve(&col);
-        Ok((k, w.iter().copied().collect()))
+        let mut w = k.clone();
+        self.llt.solve_in_place(&mut w);
+        Ok((k, w))
     }
 
     /// `cos(theta_i) cos(theta_o)` of every bin (at its representative

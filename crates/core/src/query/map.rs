@@ -16,8 +16,9 @@
 //!   accuracy for time (docs/performance.md has the figures).
 
 use brdf_merl::Quadrature;
-use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, Par};
+use faer::Mat;
+
+use crate::dense::product::matmul;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -324,21 +325,26 @@ impl Model {
                     Rows::F32(z) => z[rows[j].0 * n + i] as f64,
                     Rows::F64(z) => z[rows[j].0 * n + i],
                 });
-                // C^T = K^-1 Z_q^T, so that the values at x are mean + C k(x).
-                let c = self.llt_solve(&zq).transpose().to_owned();
+                // C^T = K^-1 Z_q^T, so that the values at x are mean + C k(x);
+                // C column-major (r x n) for the product.
+                let ct = self.llt_solve(&zq);
+                let c: Vec<f64> = (0..n)
+                    .flat_map(|i| (0..r).map(move |j| (i, j)))
+                    .map(|(i, j)| ct[(i, j)])
+                    .collect();
                 let mean: Vec<f64> = rows.iter().map(|&(row, ..)| store.mean()[row]).collect();
                 let weight: Vec<f64> = rows.iter().map(|x| x.2).collect();
                 rgb.par_chunks_mut(width).enumerate().for_each(|(py, out)| {
-                    let mut kx = Mat::<f64>::zeros(n, width);
+                    // k(x) of each pixel of the row, column-major n x width.
+                    let mut kx = vec![0.0f64; n * width];
                     let ey = &ey[py * n..(py + 1) * n];
-                    for (px, ex) in ex.chunks_exact(n).enumerate() {
-                        for (i, (a, b)) in ex.iter().zip(ey).enumerate() {
-                            kx[(i, px)] = a * b;
+                    for (ex, col) in ex.chunks_exact(n).zip(kx.chunks_exact_mut(n)) {
+                        for ((o, a), b) in col.iter_mut().zip(ex).zip(ey) {
+                            *o = a * b;
                         }
                     }
                     let mut vbuf = vec![0.0f64; r * width];
-                    let v = faer::MatMut::from_column_major_slice_mut(&mut vbuf, r, width);
-                    matmul(v, Accum::Replace, c.as_ref(), kx.as_ref(), 1.0, Par::Seq);
+                    matmul(&mut vbuf, &c, &kx, n);
                     let mut terms = vec![0.0f64; r];
                     for (px, o) in out.iter_mut().enumerate() {
                         let col = &vbuf[px * r..(px + 1) * r];

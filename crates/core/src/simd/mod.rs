@@ -16,6 +16,13 @@ pub fn has_avx2() -> bool {
     std::arch::is_x86_feature_detected!("avx2")
 }
 
+/// Whether the CPU has AVX-512F (the Gram kernel's widest path).
+#[cfg(target_arch = "x86_64")]
+#[inline]
+pub fn has_avx512f() -> bool {
+    std::arch::is_x86_feature_detected!("avx512f")
+}
+
 /// Whether the CPU has AVX2 and FMA, for the paths written with fused
 /// multiply-adds.
 #[cfg(target_arch = "x86_64")]

@@ -8,10 +8,10 @@ use std::sync::Mutex;
 
 use brdf_atomic::PendingFile;
 use brdf_merl::table::{is_invalid, is_non_finite};
-use faer::linalg::matmul::triangular::{self as tri, BlockStructure};
-use faer::{Accum, Mat, MatRef, Par};
+use faer::Mat;
 
 use crate::data::transform::TransformKind;
+use crate::dense::gram::syrk_lower_add;
 use crate::error::{CoreError, Result};
 use crate::progress::Progress;
 use crate::simd::fold::{GROUPS, ordered_blocks};
@@ -24,7 +24,8 @@ use crate::data::Dataset;
 /// material by material: `buf[i * len + r]` is material `i` in row `r0 + r`,
 /// with `len = buf.len() / n` rows in the block. Blocks are grouped into
 /// [`GROUPS`] fixed ranges summed in order ([`ordered_blocks`]), so the result does not depend on
-/// how rayon schedules them.
+/// how rayon schedules them; each block's products are summed in a fixed
+/// order by [`syrk_lower_add`], on every CPU.
 pub(super) fn gram_fold<S: Send>(
     rows: usize,
     n: usize,
@@ -36,44 +37,26 @@ pub(super) fn gram_fold<S: Send>(
         rows,
         BLOCK_ROWS,
         GROUPS,
-        || {
-            (
-                Mat::<f64>::zeros(n, n),
-                vec![0.0f64; BLOCK_ROWS * n],
-                scratch(),
-            )
-        },
+        || (vec![0.0f64; n * n], vec![0.0f64; BLOCK_ROWS * n], scratch()),
         |(acc, buf, scratch), range| {
             let len = range.len();
             let buf = &mut buf[..len * n];
             fill(scratch, range.start, buf);
             // Material-major is column-major rows x n: Y += Z_b^T Z_b.
-            let zc = MatRef::from_column_major_slice(buf, len, n);
-            tri::matmul(
-                acc.as_mut(),
-                BlockStructure::TriangularLower,
-                Accum::Add,
-                zc.transpose(),
-                BlockStructure::Rectangular,
-                zc,
-                BlockStructure::Rectangular,
-                1.0,
-                Par::Seq,
-            );
+            syrk_lower_add(buf, len, acc);
             progress.advance(len as u64);
         },
     );
-    let mut y = Mat::<f64>::zeros(n, n);
+    let mut y = vec![0.0f64; n * n];
     for (p, _, _) in &partials {
-        y += p;
+        y.iter_mut().zip(p).for_each(|(a, b)| *a += b);
     }
     // Only the lower triangle was accumulated (half the flops): mirror it.
-    for i in 0..n {
-        for j in 0..i {
-            y[(j, i)] = y[(i, j)];
-        }
-    }
-    y
+    Mat::from_fn(
+        n,
+        n,
+        |i, j| if i >= j { y[j * n + i] } else { y[i * n + j] },
+    )
 }
 
 /// Rows of a block centred and transposed together: one cache line of f64

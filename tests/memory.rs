@@ -1,0 +1,151 @@
+//! The private memory (`VmData`) of a fit and of the model's queries stays
+//! under 512 MB, however large an L3 cache the CPU reports.
+//!
+//! Matrix libraries size per-thread scratch buffers from the L3 cache size
+//! the system reports; on a virtual machine that reports 260 MiB of L3,
+//! faer's x86 products reserve 520 MiB in every thread that runs one. This
+//! test runs the real binary on 100 synthetic materials (enough for every
+//! dense step, the factorisations included, to reach the sizes where faer
+//! would use those products), samples each child's `VmData` from
+//! `/proc/PID/status` every millisecond while it runs, and checks the
+//! `fit` summary's own figure; then runs the leave-one-out pass in this
+//! process on two threads. Reserved scratch stays for the life of its
+//! thread, so sampling cannot miss it.
+#![cfg(target_os = "linux")]
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+use brdf_atlas_core::{Model, NoProgress, loo};
+use common::{binaries, synth};
+
+/// The bound, in bytes.
+const LIMIT: u64 = 512_000_000;
+
+/// `VmData` in bytes from a `/proc/PID/status` text (read here, not
+/// through the library, so the check does not trust the code it checks).
+fn vm_data(status: &str) -> Option<u64> {
+    let line = status.lines().find_map(|l| l.strip_prefix("VmData:"))?;
+    let kib: u64 = line.trim().strip_suffix("kB")?.trim().parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// Run `brdf-atlas args` to success; its stdout and the largest `VmData`
+/// sampled while it ran, in bytes.
+fn run_sampled(dir: &Path, args: &[&dyn AsRef<std::ffi::OsStr>]) -> (String, u64) {
+    let out_path = dir.join("stdout.txt");
+    let err_path = dir.join("stderr.txt");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_brdf-atlas"))
+        .args(args.iter().map(|a| a.as_ref()))
+        .stdout(std::fs::File::create(&out_path).unwrap())
+        .stderr(std::fs::File::create(&err_path).unwrap())
+        .stdin(Stdio::null())
+        .spawn()
+        .expect("the binary runs");
+    let status_file = format!("/proc/{}/status", child.id());
+    let mut peak = 0;
+    let status = loop {
+        // A child that has exited but not been reaped has no VmData line.
+        if let Some(bytes) = std::fs::read_to_string(&status_file)
+            .ok()
+            .and_then(|s| vm_data(&s))
+        {
+            peak = peak.max(bytes);
+        }
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    };
+    let stdout = std::fs::read_to_string(&out_path).unwrap();
+    let stderr = std::fs::read_to_string(&err_path).unwrap();
+    assert!(status.success(), "{stderr}");
+    assert!(peak > 0, "no sample of {status_file}");
+    (stdout, peak)
+}
+
+/// `12.3 MB` or `1.05 GB` (the summary's sizes) in bytes.
+fn parse_size(text: &str) -> u64 {
+    let (value, unit) = text.trim().split_once(' ').expect("a value and a unit");
+    let value: f64 = value.parse().expect("a number");
+    let scale = match unit {
+        "kB" => 1e3,
+        "MB" => 1e6,
+        "GB" => 1e9,
+        _ => panic!("unit {unit:?}"),
+    };
+    (value * scale) as u64
+}
+
+#[test]
+fn fit_and_queries_stay_under_512_mb_of_private_memory() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("merl");
+    synth(&data, 100, "16,16,32", 7);
+    let model = tmp.path().join("model.atlas");
+
+    let (summary, fit_peak) = run_sampled(tmp.path(), &[&"fit", &data, &"-o", &model]);
+    assert!(fit_peak <= LIMIT, "fit: VmData reached {fit_peak} bytes");
+    let line = summary
+        .lines()
+        .find(|l| l.trim_start().starts_with("memory"))
+        .unwrap_or_else(|| panic!("a memory line in {summary}"));
+    let reported = line
+        .split("peak private ")
+        .nth(1)
+        .and_then(|s| s.split(" (VmData)").next())
+        .unwrap_or_else(|| panic!("peak private in {line}"));
+    let reported = parse_size(reported);
+    assert!(reported > 0 && reported <= LIMIT, "{line}");
+
+    let png = tmp.path().join("map.png");
+    let new = tmp.path().join("new.binary");
+    let files = binaries(&data);
+    let runs: [Vec<&dyn AsRef<std::ffi::OsStr>>; 4] = [
+        vec![
+            &"map",
+            &model,
+            &"-o",
+            &png,
+            &"--size",
+            &"48",
+            &"--samples",
+            &"16",
+        ],
+        vec![&"reconstruct", &model, &"--at", &"0.1,-0.2", &"-o", &new],
+        vec![&"locate", &model, &files[0], &files[1]],
+        vec![
+            &"eval", &model, &"--at", &"0.3,0.3", &"--wi", &"0.5,0", &"--wo", &"0.5,3.1",
+        ],
+    ];
+    for args in &runs {
+        let (_, peak) = run_sampled(tmp.path(), args);
+        assert!(
+            peak <= LIMIT,
+            "{:?}: VmData reached {peak} bytes",
+            args[0].as_ref()
+        );
+    }
+
+    // Leave-one-out in this process, on two threads: its predictors
+    // (factorisation, inverse, eigen-decomposition) and its pass over the store.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        let m = Model::open(&model).unwrap();
+        let kernel = m.file().kernel;
+        let predictors = vec![
+            loo::gp_predictor(&kernel, m.latent().as_ref(), true).unwrap(),
+            loo::pca_predictor(m.gram().as_ref(), 3).unwrap(),
+        ];
+        let ev = loo::evaluate(m.store(), &predictors, &NoProgress).unwrap();
+        assert_eq!(ev.rows, m.store().rows());
+    });
+    let now = vm_data(&std::fs::read_to_string("/proc/self/status").unwrap()).unwrap();
+    assert!(now <= LIMIT, "leave-one-out: VmData {now} bytes");
+}
