@@ -5,11 +5,12 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use brdf_atlas_core::{DEFAULT_SAMPLES, Model, NoProgress, View};
+use brdf_atlas_core::{BlendRule, DEFAULT_SAMPLES, Model, NoProgress, View};
 use brdf_merl::MerlFile;
 use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArray4};
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use crate::arrays::{Directions, describe, point, table_from_array, table_values};
 use crate::errors::{Failure, Result};
@@ -155,6 +156,57 @@ impl PyModel {
         let x = point(x)?;
         let w = self.inner.weights_at(&x).map_err(Failure::from)?;
         Ok(Array1::from(w).into_pyarray(py))
+    }
+
+    /// What the model knows at `x`: a dict with `variance` (the GP's
+    /// predictive variance, 0 at an input material, 1 far from all of them),
+    /// `weight_sum`, and `low` (variance above 0.5: the material there is
+    /// mostly the database's mean). Costs as much as `weights`.
+    fn confidence<'py>(
+        &self,
+        py: Python<'py>,
+        x: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let x = point(x)?;
+        let c = self.inner.at(&x).map_err(Failure::from)?.confidence();
+        let d = PyDict::new(py);
+        d.set_item("variance", c.variance)?;
+        d.set_item("weight_sum", c.weight_sum)?;
+        d.set_item("low", c.is_low())?;
+        Ok(d)
+    }
+
+    /// How physical the material at `x` is, under blend rule `blend`
+    /// ("gp", the default, or "plausible"): a dict with
+    /// `clamped_reflectance` (share of the cosine-weighted reflectance the
+    /// clamp to >= 0 removes), `clamped_values`, `max_albedo` (largest
+    /// directional albedo; at most 1 for a physical material),
+    /// `max_albedo_incidence` (degrees) and `plausible`. One pass over the
+    /// store, without the GIL.
+    #[pyo3(signature = (x, blend = "gp"))]
+    fn plausibility<'py>(
+        &self,
+        py: Python<'py>,
+        x: &Bound<'py, PyAny>,
+        blend: &str,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let x = point(x)?;
+        let rule = BlendRule::parse(blend).ok_or_else(|| {
+            Failure::input(format!(
+                "blend rule {blend:?}: expected \"gp\" or \"plausible\""
+            ))
+        })?;
+        let p = py.detach(|| {
+            let b = self.inner.at_with(&x, rule)?;
+            Ok::<_, Failure>(b.plausibility()?)
+        })?;
+        let d = PyDict::new(py);
+        d.set_item("clamped_reflectance", p.clamped_reflectance)?;
+        d.set_item("clamped_values", p.clamped_values)?;
+        d.set_item("max_albedo", p.max_albedo)?;
+        d.set_item("max_albedo_incidence", p.max_albedo_incidence)?;
+        d.set_item("plausible", p.is_plausible())?;
+        Ok(d)
     }
 
     /// The material at `x`, for repeated queries (it remembers the bins it

@@ -157,3 +157,24 @@ def test_albedo_map(request, which):
         x, y = point_of(model, name)
         one = model.albedo_map(1, 1, view=(x - 0.01, x + 0.01, y - 0.01, y + 0.01), samples=samples)
         assert np.allclose(one[0, 0], rho, rtol=rtol), (name, one[0, 0])
+
+
+@pytest.mark.parametrize("blend", ["gp", "plausible"])
+def test_plausibility_and_confidence_equal_the_cli_record(log_model, cli, tmp_path, blend):
+    x = [0.9, -0.95]
+    out = subprocess.run([str(cli), "reconstruct", str(log_model.path), "--at", f"{x[0]!r},{x[1]!r}",
+                          "--blend", blend, "--json", "-o", str(tmp_path / "m.binary")],
+                         check=True, capture_output=True, text=True).stdout
+    import json
+    rec = json.loads(out)
+    p = log_model.plausibility(x, blend=blend)
+    for key in ["clamped_reflectance", "clamped_values", "max_albedo", "max_albedo_incidence"]:
+        assert p[key] == rec["plausibility"][key], key
+    assert p["plausible"] == rec["plausible"]
+    c = log_model.confidence(x)
+    assert c["variance"] == rec["confidence"]["variance"]
+    # Far from every material the model knows nothing, and says so.
+    far = log_model.confidence([30.0, 30.0])
+    assert far["low"] and far["variance"] > 0.999 and abs(far["weight_sum"]) < 1e-6
+    with pytest.raises(ba.Error, match="blend rule"):
+        log_model.plausibility(x, blend="convex")
