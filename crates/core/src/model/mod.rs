@@ -176,6 +176,11 @@ impl Model {
         self.llt.solve(b)
     }
 
+    /// The lower Cholesky factor `L` of `K = L L^T` (noise included).
+    pub(crate) fn llt_lower(&self) -> faer::MatRef<'_, f64> {
+        self.llt.L()
+    }
+
     /// The Gram matrix `Y = Z Z^T` of the stored (centred, transformed) data.
     pub fn gram(&self) -> &Mat<f64> {
         &self.gram

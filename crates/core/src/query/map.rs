@@ -17,7 +17,8 @@
 
 use brdf_merl::Quadrature;
 use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, Par};
+use faer::linalg::triangular_solve::solve_lower_triangular_in_place;
+use faer::{Accum, Mat, MatRef, Par};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -119,6 +120,10 @@ pub struct AlbedoMap {
     pub view: View,
     /// Linear RGB albedo, `width * height`, row-major.
     pub rgb: Vec<[f32; 3]>,
+    /// The GP's predictive variance `1 - k(x)^T K^-1 k(x)` of each pixel's
+    /// latent point, `width * height`: 0 at an input material, 1 where the
+    /// data say nothing (see [`crate::Confidence`]).
+    pub variance: Vec<f32>,
     /// How it was computed.
     pub method: AlbedoMethod,
 }
@@ -265,6 +270,19 @@ impl Model {
             view.pixel_to_latent(0.0, py as f64, width, height)[1]
         });
         let mut rgb = vec![[0.0f32; 3]; width * height];
+        let mut variance = vec![0.0f32; width * height];
+        let lower = self.llt_lower();
+        // k(x) of every pixel of row `py`, one column a pixel.
+        let kernel_row = |py: usize| {
+            let mut kx = Mat::<f64>::zeros(n, width);
+            let ey = &ey[py * n..(py + 1) * n];
+            for (px, ex) in ex.chunks_exact(n).enumerate() {
+                for (i, (a, b)) in ex.iter().zip(ey).enumerate() {
+                    kx[(i, px)] = a * b;
+                }
+            }
+            kx
+        };
         progress.start("map", height as u64);
         let method = match samples {
             None => {
@@ -277,19 +295,23 @@ impl Model {
                 let (cols, m) = self.linear_basis();
                 // albedo(x, y)_c = m_c + sum_i ex_i(x) (ey_i(y) B_ic): per row, the
                 // column factors meet one N-vector per channel.
-                rgb.par_chunks_mut(width).enumerate().for_each(|(py, row)| {
-                    let ey = &ey[py * n..(py + 1) * n];
-                    let v: Vec<Vec<f64>> = cols
-                        .iter()
-                        .map(|col| ey.iter().zip(col).map(|(e, b)| e * b).collect())
-                        .collect();
-                    for (out, ex) in row.iter_mut().zip(ex.chunks_exact(n)) {
-                        for (o, (v, mc)) in out.iter_mut().zip(v.iter().zip(*m)) {
-                            *o = (mc + dot::dot(v, ex)) as f32;
+                rgb.par_chunks_mut(width)
+                    .zip(variance.par_chunks_mut(width))
+                    .enumerate()
+                    .for_each(|(py, (row, var))| {
+                        variances(lower, kernel_row(py), var);
+                        let ey = &ey[py * n..(py + 1) * n];
+                        let v: Vec<Vec<f64>> = cols
+                            .iter()
+                            .map(|col| ey.iter().zip(col).map(|(e, b)| e * b).collect())
+                            .collect();
+                        for (out, ex) in row.iter_mut().zip(ex.chunks_exact(n)) {
+                            for (o, (v, mc)) in out.iter_mut().zip(v.iter().zip(*m)) {
+                                *o = (mc + dot::dot(v, ex)) as f32;
+                            }
                         }
-                    }
-                    progress.advance(1);
-                });
+                        progress.advance(1);
+                    });
                 AlbedoMethod::Linear
             }
             Some(s) => {
@@ -328,37 +350,35 @@ impl Model {
                 let c = self.llt_solve(&zq).transpose().to_owned();
                 let mean: Vec<f64> = rows.iter().map(|&(row, ..)| store.mean()[row]).collect();
                 let weight: Vec<f64> = rows.iter().map(|x| x.2).collect();
-                rgb.par_chunks_mut(width).enumerate().for_each(|(py, out)| {
-                    let mut kx = Mat::<f64>::zeros(n, width);
-                    let ey = &ey[py * n..(py + 1) * n];
-                    for (px, ex) in ex.chunks_exact(n).enumerate() {
-                        for (i, (a, b)) in ex.iter().zip(ey).enumerate() {
-                            kx[(i, px)] = a * b;
+                rgb.par_chunks_mut(width)
+                    .zip(variance.par_chunks_mut(width))
+                    .enumerate()
+                    .for_each(|(py, (out, var))| {
+                        let kx = kernel_row(py);
+                        let mut vbuf = vec![0.0f64; r * width];
+                        let v = faer::MatMut::from_column_major_slice_mut(&mut vbuf, r, width);
+                        matmul(v, Accum::Replace, c.as_ref(), kx.as_ref(), 1.0, Par::Seq);
+                        let mut terms = vec![0.0f64; r];
+                        for (px, o) in out.iter_mut().enumerate() {
+                            let col = &vbuf[px * r..(px + 1) * r];
+                            // Element-wise first (vectorises), then a fixed-order sum.
+                            let it = terms.iter_mut().zip(&mean).zip(&weight).zip(col);
+                            if exponential {
+                                it.for_each(|(((o, m), w), t)| {
+                                    *o = w * (fastexp::exp(m + t) - 1.0).max(0.0)
+                                });
+                            } else {
+                                it.for_each(|(((o, m), w), t)| *o = w * (m + t).max(0.0));
+                            }
+                            let mut start = 0;
+                            for (ch, &end) in ends.iter().enumerate() {
+                                o[ch] = sum4(&terms[start..end]) as f32;
+                                start = end;
+                            }
                         }
-                    }
-                    let mut vbuf = vec![0.0f64; r * width];
-                    let v = faer::MatMut::from_column_major_slice_mut(&mut vbuf, r, width);
-                    matmul(v, Accum::Replace, c.as_ref(), kx.as_ref(), 1.0, Par::Seq);
-                    let mut terms = vec![0.0f64; r];
-                    for (px, o) in out.iter_mut().enumerate() {
-                        let col = &vbuf[px * r..(px + 1) * r];
-                        // Element-wise first (vectorises), then a fixed-order sum.
-                        let it = terms.iter_mut().zip(&mean).zip(&weight).zip(col);
-                        if exponential {
-                            it.for_each(|(((o, m), w), t)| {
-                                *o = w * (fastexp::exp(m + t) - 1.0).max(0.0)
-                            });
-                        } else {
-                            it.for_each(|(((o, m), w), t)| *o = w * (m + t).max(0.0));
-                        }
-                        let mut start = 0;
-                        for (ch, &end) in ends.iter().enumerate() {
-                            o[ch] = sum4(&terms[start..end]) as f32;
-                            start = end;
-                        }
-                    }
-                    progress.advance(1);
-                });
+                        variances(lower, kx, var);
+                        progress.advance(1);
+                    });
                 AlbedoMethod::Quadrature {
                     samples: s,
                     bins: rule.len(),
@@ -372,8 +392,20 @@ impl Model {
             height,
             view,
             rgb,
+            variance,
             method,
         })
+    }
+}
+
+/// The predictive variance `1 - |L^-1 k|^2` (`K = L L^T`) of each column `k`
+/// of `kx`, clamped to `[0, 1]`; `kx` is overwritten by `L^-1 kx`.
+fn variances(lower: MatRef<'_, f64>, mut kx: Mat<f64>, out: &mut [f32]) {
+    solve_lower_triangular_in_place(lower, kx.as_mut(), Par::Seq);
+    for (px, o) in out.iter_mut().enumerate() {
+        let col = kx.col(px).try_as_col_major().map(|c| c.as_slice());
+        let kk = col.map_or(0.0, |c| dot::dot(c, c));
+        *o = (1.0 - kk).clamp(0.0, 1.0) as f32;
     }
 }
 

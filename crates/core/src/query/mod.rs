@@ -3,11 +3,16 @@
 
 pub(crate) mod budget;
 pub mod contour;
+mod decor;
+mod labels;
 pub mod locate;
 pub mod map;
+mod overlay;
+mod paint;
 pub mod plausibility;
 pub mod reconstruct;
 pub mod render;
+mod sidecar;
 
 pub use contour::{Segment, contour_levels, contours, luminance};
 pub use locate::Located;
