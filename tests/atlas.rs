@@ -318,6 +318,8 @@ fn eval_rows(stdout: &str) -> Vec<Option<[f64; 3]>> {
     stdout
         .lines()
         .skip(2)
+        // The table ends where the confidence (and plausibility) lines begin.
+        .take_while(|l| !l.starts_with("confidence:"))
         .map(|l| {
             if l.ends_with("below horizon / unmeasured") {
                 return None;
