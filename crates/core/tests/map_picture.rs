@@ -182,6 +182,7 @@ fn variance_matches_a_dense_recomputation_and_the_fade_follows_the_rule() {
         let blend = model.at(&x).unwrap();
         assert!((blend.confidence().variance - want).abs() < 1e-6);
     }
+    assert_eq!(model.variance_map(side, side, view).unwrap(), map.variance);
     let low = map
         .variance
         .iter()

@@ -245,44 +245,12 @@ impl Model {
         }
         view.check()?;
         self.store().verify_cheap()?;
-        let kernel = self.file().kernel;
-        let latent = self.latent();
-        let n = latent.nrows();
-        // The RBF is separable: k(x, y)_i = e^(-(x - x_i)^2 / 2l^2) e^(-(y - y_i)^2 / 2l^2),
-        // so one factor per pixel column and one per pixel row (N each) give
-        // every pixel's k(x) with N multiplications and no exponential.
-        let inv2l2 = 1.0 / (2.0 * kernel.length_scale * kernel.length_scale);
-        let factors = |count: usize, axis: usize, centre: &dyn Fn(usize) -> f64| -> Vec<f64> {
-            let mut f = vec![0.0; count * n];
-            for (k, out) in f.chunks_exact_mut(n).enumerate() {
-                let c = centre(k);
-                for (i, o) in out.iter_mut().enumerate() {
-                    let d = latent[(i, axis)] - c;
-                    *o = (-d * d * inv2l2).exp();
-                }
-            }
-            f
-        };
-        let ex = factors(width, 0, &|px| {
-            view.pixel_to_latent(px as f64, 0.0, width, height)[0]
-        });
-        let ey = factors(height, 1, &|py| {
-            view.pixel_to_latent(0.0, py as f64, width, height)[1]
-        });
+        let n = self.latent().nrows();
+        let (ex, ey) = self.kernel_factors(width, height, view);
         let mut rgb = vec![[0.0f32; 3]; width * height];
         let mut variance = vec![0.0f32; width * height];
         let lower = self.llt_lower();
-        // k(x) of every pixel of row `py`, one column a pixel.
-        let kernel_row = |py: usize| {
-            let mut kx = Mat::<f64>::zeros(n, width);
-            let ey = &ey[py * n..(py + 1) * n];
-            for (px, ex) in ex.chunks_exact(n).enumerate() {
-                for (i, (a, b)) in ex.iter().zip(ey).enumerate() {
-                    kx[(i, px)] = a * b;
-                }
-            }
-            kx
-        };
+        let kernel_row = |py: usize| kernel_row(&ex, &ey, n, py);
         progress.start("map", height as u64);
         let method = match samples {
             None => {
@@ -407,6 +375,80 @@ fn variances(lower: MatRef<'_, f64>, mut kx: Mat<f64>, out: &mut [f32]) {
         let kk = col.map_or(0.0, |c| dot::dot(c, c));
         *o = (1.0 - kk).clamp(0.0, 1.0) as f32;
     }
+}
+
+impl Model {
+    /// The separable RBF's factors of a `width x height` image of `view`:
+    /// `k(x, y)_i = e^(-(x - x_i)^2 / 2l^2) e^(-(y - y_i)^2 / 2l^2)`, so one
+    /// factor per pixel column and one per pixel row (N each, column- and
+    /// row-major) give every pixel's `k(x)` with N multiplications and no
+    /// exponential.
+    fn kernel_factors(&self, width: usize, height: usize, view: View) -> (Vec<f64>, Vec<f64>) {
+        let kernel = self.file().kernel;
+        let latent = self.latent();
+        let n = latent.nrows();
+        let inv2l2 = 1.0 / (2.0 * kernel.length_scale * kernel.length_scale);
+        let factors = |count: usize, axis: usize, centre: &dyn Fn(usize) -> f64| -> Vec<f64> {
+            let mut f = vec![0.0; count * n];
+            for (k, out) in f.chunks_exact_mut(n).enumerate() {
+                let c = centre(k);
+                for (i, o) in out.iter_mut().enumerate() {
+                    let d = latent[(i, axis)] - c;
+                    *o = (-d * d * inv2l2).exp();
+                }
+            }
+            f
+        };
+        let ex = factors(width, 0, &|px| {
+            view.pixel_to_latent(px as f64, 0.0, width, height)[0]
+        });
+        let ey = factors(height, 1, &|py| {
+            view.pixel_to_latent(0.0, py as f64, width, height)[1]
+        });
+        (ex, ey)
+    }
+
+    /// The GP's predictive variance of every pixel of a `width x height`
+    /// image of `view` (row 0 at the top), as [`AlbedoMap::variance`] holds
+    /// it, without the albedo: no pass over the store, O(N^2) a pixel.
+    pub fn variance_map(&self, width: usize, height: usize, view: View) -> Result<Vec<f32>> {
+        if self.q() != 2 {
+            return Err(CoreError::BadQuery(format!(
+                "a map needs a 2-D latent space, this model has q = {}",
+                self.q()
+            )));
+        }
+        let max = crate::limits::MAX_MAP_SIDE;
+        if width == 0 || height == 0 || width > max || height > max {
+            return Err(CoreError::BadQuery(format!(
+                "map size {width}x{height} must be between 1 and {max} a side"
+            )));
+        }
+        view.check()?;
+        let n = self.latent().nrows();
+        let (ex, ey) = self.kernel_factors(width, height, view);
+        let lower = self.llt_lower();
+        let mut variance = vec![0.0f32; width * height];
+        variance
+            .par_chunks_mut(width)
+            .enumerate()
+            .for_each(|(py, out)| variances(lower, kernel_row(&ex, &ey, n, py), out));
+        Ok(variance)
+    }
+}
+
+/// `k(x)` of every pixel of row `py`, one column a pixel, from the factors
+/// of [`Model::kernel_factors`].
+fn kernel_row(ex: &[f64], ey: &[f64], n: usize, py: usize) -> Mat<f64> {
+    let width = ex.len() / n;
+    let mut kx = Mat::<f64>::zeros(n, width);
+    let ey = &ey[py * n..(py + 1) * n];
+    for (px, ex) in ex.chunks_exact(n).enumerate() {
+        for (i, (a, b)) in ex.iter().zip(ey).enumerate() {
+            kx[(i, px)] = a * b;
+        }
+    }
+    kx
 }
 
 /// Sum with four interleaved partial sums: vectorisable, and the same bits every time.
