@@ -598,7 +598,10 @@ fn swatches_writes_a_sheet_of_spheres_and_names_what_is_wrong() {
     // Three cells a row, each the sphere and 6 pixels around it, and a line of text under it.
     assert_eq!(w, 3 * (20 + 12));
     assert!(h > 3 * (20 + 12) && h < 3 * (20 + 12 + 20), "{h}");
-    assert_eq!(&std::fs::read(&exr).unwrap()[..4], &[0x76, 0x2f, 0x31, 0x01]);
+    assert_eq!(
+        &std::fs::read(&exr).unwrap()[..4],
+        &[0x76, 0x2f, 0x31, 0x01]
+    );
 
     let name = binaries(&fx.data())[1]
         .file_stem()
@@ -629,4 +632,31 @@ fn swatches_writes_a_sheet_of_spheres_and_names_what_is_wrong() {
     ]);
     assert_one_error_line(&out, &["model.atlas", "no-such-material"]);
     assert!(!fx.path("none.png").exists());
+}
+
+#[test]
+fn locate_reaches_beyond_the_box_and_says_so() {
+    let fx = Fixture::new(6, &[]);
+    let beyond = fx.path("beyond.binary");
+    let out = brdf_atlas([
+        "reconstruct".as_ref(),
+        fx.model().as_os_str(),
+        "--at".as_ref(),
+        "1.6,0.3".as_ref(),
+        "-o".as_ref(),
+        beyond.as_os_str(),
+    ]);
+    assert!(out.status.success(), "{}", texts(&out).1);
+    let out = brdf_atlas([PathBuf::from("locate"), fx.model(), beyond]);
+    let (stdout, stderr) = texts(&out);
+    assert!(out.status.success(), "{stderr}");
+    let x = point_after_at(stdout.lines().next().unwrap());
+    assert!(
+        (x[0] - 1.6).abs() < 0.03 && (x[1] - 0.3).abs() < 0.03,
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("outside the map's default view") && stdout.contains("--view=-2,2,-2,2"),
+        "{stdout}"
+    );
 }

@@ -365,7 +365,8 @@ pub unsafe extern "C" fn brdf_atlas_model_variance_map(
 
 /// Find where the MERL file at `merl_path` lands in the model's latent
 /// plane: the point whose reconstruction matches it best, searched over the
-/// box [-1, 1]^2. The file must have the model's dims.
+/// whole plane (it may lie outside the box [-1, 1]^2 the inputs were fitted
+/// in, and outside the default view). The file must have the model's dims.
 ///
 /// Ownership: `model` and `merl_path` are borrowed; `*location` is written
 /// on success only.
