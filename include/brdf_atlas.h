@@ -84,6 +84,13 @@
 #define BRDF_ATLAS_DEFAULT_VIEW_HALF_WIDTH 1.1
 
 /**
+ * Above this predictive variance (`brdf_atlas_model_confidence`,
+ * `brdf_atlas_model_variance_map`) the model knows little: the data explain
+ * less than half of what the material there could be.
+ */
+#define BRDF_ATLAS_LOW_CONFIDENCE_VARIANCE 0.5
+
+/**
  * The largest quadrature sample count a map accepts (2^24): more would only
  * take hours.
  */
@@ -737,9 +744,38 @@ enum BrdfAtlasStatus brdf_atlas_model_albedo_map(const struct BrdfAtlasModel *mo
                                                  size_t len);
 
 /**
+ * The GP's predictive variance (`1 - k(x)^T K^-1 k(x)`: 0 at an input
+ * material, 1 where the data say nothing, above 0.5 the model knows
+ * little) at every pixel of a `width` x `height` image of `view`, laid out
+ * as `brdf_atlas_model_albedo_map` lays out its pixels, one float a pixel:
+ * pixel (px, py) is at `buf[py * width + px]`. A map picture fades where it
+ * is high. No pass over the store: much cheaper than the albedo map.
+ *
+ * `view` NULL means the model's default window.
+ *
+ * Ownership: `model` and `view` are borrowed; `buf` is caller-owned, `len`
+ * floats (at least width * height), written on success only.
+ *
+ * Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (zero size or more than
+ * `BRDF_ATLAS_MAX_MAP_SIDE` a side, view not finite or empty), UNSUPPORTED
+ * (the model is not 2-D), BUFFER_TOO_SMALL.
+ *
+ * # Safety
+ * `model` is NULL or a live handle; `view` is NULL or valid for reading;
+ * `buf` is NULL or valid for writing `len` floats.
+ */
+enum BrdfAtlasStatus brdf_atlas_model_variance_map(const struct BrdfAtlasModel *model,
+                                                   size_t width,
+                                                   size_t height,
+                                                   const struct BrdfAtlasView *view,
+                                                   float *buf,
+                                                   size_t len);
+
+/**
  * Find where the MERL file at `merl_path` lands in the model's latent
  * plane: the point whose reconstruction matches it best, searched over the
- * box [-1, 1]^2. The file must have the model's dims.
+ * whole plane (it may lie outside the box [-1, 1]^2 the inputs were fitted
+ * in, and outside the default view). The file must have the model's dims.
  *
  * Ownership: `model` and `merl_path` are borrowed; `*location` is written
  * on success only.

@@ -196,6 +196,27 @@ public:
         return map(width, height, nullptr, 0);
     }
 
+    /// The GP's predictive variance of every pixel of the map of `view`
+    /// (width * height floats, row 0 at the top): 0 at a material, 1 where
+    /// the data say nothing, above 0.5 the model knows little.
+    std::vector<float> variance_map(std::size_t width, std::size_t height,
+                                    const View &view) const {
+        if (width == 0 || height == 0 || width > BRDF_ATLAS_MAX_MAP_SIDE ||
+            height > BRDF_ATLAS_MAX_MAP_SIDE) {
+            check(brdf_atlas_model_variance_map(handle_, width, height, &view, nullptr, 0));
+        }
+        std::vector<float> v(width * height);
+        check(brdf_atlas_model_variance_map(handle_, width, height, &view, v.data(), v.size()));
+        return v;
+    }
+
+    /// The GP's predictive variance at (x, y) (no pass over the store).
+    double variance(double x, double y) const {
+        double v = 0;
+        check(brdf_atlas_model_confidence(handle_, x, y, &v, nullptr));
+        return v;
+    }
+
     /// Where the MERL file at `merl_path` lands.
     Location locate(const std::string &merl_path) const {
         Location l{};

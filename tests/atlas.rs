@@ -317,13 +317,11 @@ fn reconstruct_takes_q_coordinates_in_a_higher_dimensional_model() {
 /// header lines, before the closing `confidence:` line), `None` for a pair
 /// without value.
 fn eval_rows(stdout: &str) -> Vec<Option<[f64; 3]>> {
-    let lines: Vec<&str> = stdout.lines().skip(2).collect();
-    let (last, rows) = lines.split_last().expect("eval printed rows");
-    assert!(
-        last.starts_with("confidence: predictive variance "),
-        "{last:?}"
-    );
-    rows.iter()
+    stdout
+        .lines()
+        .skip(2)
+        // The table ends where the confidence (and plausibility) lines begin.
+        .take_while(|l| !l.starts_with("confidence:"))
         .map(|l| {
             if l.ends_with("below horizon / unmeasured") {
                 return None;
@@ -576,4 +574,91 @@ fn map_needs_a_two_dimensional_model() {
     let out = map(&fx.model(), &png_path, &[&"--size", &"16"]);
     assert_one_error_line(&out, &["model.atlas", "2-D latent space", "q = 3"]);
     assert!(!png_path.exists() && !fx.path("map.json").exists());
+}
+
+#[test]
+fn swatches_writes_a_sheet_of_spheres_and_names_what_is_wrong() {
+    let fx = Fixture::new(5, &[]);
+    let sheet = fx.path("sheet.png");
+    let exr = fx.path("sheet.exr");
+    let out = brdf_atlas([
+        "swatches".as_ref(),
+        fx.model().as_os_str(),
+        "-o".as_ref(),
+        sheet.as_os_str(),
+        "--exr".as_ref(),
+        exr.as_os_str(),
+        "--grid".as_ref(),
+        "3".as_ref(),
+        "--size".as_ref(),
+        "20".as_ref(),
+    ]);
+    let (stdout, stderr) = texts(&out);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stdout.starts_with("9 spheres of 20 px"), "{stdout}");
+    let (w, h) = png_size(&sheet);
+    // Three cells a row, each the sphere and 6 pixels around it, and a line of text under it.
+    assert_eq!(w, 3 * (20 + 12));
+    assert!(h > 3 * (20 + 12) && h < 3 * (20 + 12 + 20), "{h}");
+    assert_eq!(
+        &std::fs::read(&exr).unwrap()[..4],
+        &[0x76, 0x2f, 0x31, 0x01]
+    );
+
+    let name = binaries(&fx.data())[1]
+        .file_stem()
+        .unwrap()
+        .to_string_lossy()
+        .into_owned();
+    let named = fx.path("named.png");
+    let out = brdf_atlas([
+        "swatches".as_ref(),
+        fx.model().as_os_str(),
+        "-o".as_ref(),
+        named.as_os_str(),
+        "--materials".as_ref(),
+        name.as_ref(),
+        "--light".as_ref(),
+        "0,0,1,1".as_ref(),
+    ]);
+    assert!(out.status.success(), "{}", texts(&out).1);
+    assert_eq!(png_size(&named).0, 128 + 12);
+
+    let out = brdf_atlas([
+        "swatches".as_ref(),
+        fx.model().as_os_str(),
+        "-o".as_ref(),
+        fx.path("none.png").as_os_str(),
+        "--materials".as_ref(),
+        "no-such-material".as_ref(),
+    ]);
+    assert_one_error_line(&out, &["model.atlas", "no-such-material"]);
+    assert!(!fx.path("none.png").exists());
+}
+
+#[test]
+fn locate_reaches_beyond_the_box_and_says_so() {
+    let fx = Fixture::new(6, &[]);
+    let beyond = fx.path("beyond.binary");
+    let out = brdf_atlas([
+        "reconstruct".as_ref(),
+        fx.model().as_os_str(),
+        "--at".as_ref(),
+        "1.6,0.3".as_ref(),
+        "-o".as_ref(),
+        beyond.as_os_str(),
+    ]);
+    assert!(out.status.success(), "{}", texts(&out).1);
+    let out = brdf_atlas([PathBuf::from("locate"), fx.model(), beyond]);
+    let (stdout, stderr) = texts(&out);
+    assert!(out.status.success(), "{stderr}");
+    let x = point_after_at(stdout.lines().next().unwrap());
+    assert!(
+        (x[0] - 1.6).abs() < 0.03 && (x[1] - 0.3).abs() < 0.03,
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("outside the map's default view") && stdout.contains("--view=-2,2,-2,2"),
+        "{stdout}"
+    );
 }

@@ -3,6 +3,8 @@
 // for the reconstruction off the GUI thread, and check the table against
 // the C library called directly (bit for bit), then save it and compare
 // with the library's own writer byte for byte. Grabs the widget to a PNG.
+// Zoomed far out, the map fades where the model knows little, by the
+// library's rule, and a click there says so in the status line.
 // Last, a second panel on a copy of the model whose store is rewritten in
 // place while it is open: Validate and the map show the library's message,
 // the last reconstruction stays usable, and reopening the model recovers.
@@ -254,6 +256,53 @@ private slots:
         QVERIFY(!panel_->saveTo(dir.filePath("missing/x.binary")));
         QCOMPARE(failed.count(), 1);
         QVERIFY(failed.first().first().toString().contains("missing/x.binary"));
+    }
+
+    void lowConfidenceIsFadedAndSaid() {
+        // Zoomed out far beyond the materials: the map fades where the model
+        // knows little, pixel for pixel by the rule, and a click there says so.
+        const QPointF centre = view_->centre();
+        const double scale = view_->scale();
+        view_->setWindow(QPointF(0, 0), 12.0 / view_->width());
+        waitForMap();
+        const QImage &img = view_->mapImage();
+        const BrdfAtlasView w = view_->mapWindow();
+        brdf_atlas::Model m(modelPath_.toStdString());
+        brdf_atlas::View v{w.x0, w.x1, w.y0, w.y1};
+        const std::vector<float> rgb = m.albedo_map(img.width(), img.height(), v);
+        const std::vector<float> variance = m.variance_map(img.width(), img.height(), v);
+        int faded = 0;
+        for (int y = 0; y < img.height(); ++y) {
+            for (int x = 0; x < img.width(); ++x) {
+                const std::size_t p = std::size_t(y) * img.width() + x;
+                const float *c = &rgb[3 * p];
+                // The rule, spelled out: towards linear grey 0.2 by 0.75 (v - 0.5) / 0.5.
+                const float t = variance[p] > 0.5f ? 0.75f * std::min(1.0f, (variance[p] - 0.5f) / 0.5f) : 0.0f;
+                for (int k = 0; k < 3; ++k) {
+                    const float a = std::min(std::max(c[k], 0.0f), 1.0f);
+                    const float f = a + t * (0.2f - a);
+                    const float e = f <= 0.0031308f ? 12.92f * f : 1.055f * std::pow(f, 1.0f / 2.4f) - 0.055f;
+                    const int want = int(std::lround(255 * e));
+                    const QRgb got = img.pixel(x, y);
+                    const int have = k == 0 ? qRed(got) : k == 1 ? qGreen(got) : qBlue(got);
+                    QVERIFY2(std::abs(have - want) <= 1, qPrintable(QStringLiteral("pixel %1,%2").arg(x).arg(y)));
+                }
+                faded += t > 0;
+            }
+        }
+        QVERIFY2(faded > 0 && faded < img.width() * img.height(), qPrintable(QString::number(faded)));
+        // A click in a corner, far from every material.
+        QTest::mouseClick(view_, Qt::LeftButton, Qt::NoModifier, QPoint(3, 3));
+        QVERIFY(m.variance(view_->marker().x(), view_->marker().y()) > 0.5);
+        QVERIFY2(panel_->statusLabel()->text().contains("the model knows little here", Qt::CaseInsensitive),
+                 qPrintable(panel_->statusLabel()->text()));
+        // On a material: no such words.
+        QTest::mouseClick(view_, Qt::LeftButton, Qt::NoModifier,
+                          view_->latentToWidget(view_->materialPoints()[0]).toPoint());
+        QVERIFY2(!panel_->statusLabel()->text().contains("knows little"),
+                 qPrintable(panel_->statusLabel()->text()));
+        view_->setWindow(centre, scale);
+        waitForMap();
     }
 
     void storeRewrittenWhileOpenIsShownAndRecovered() {

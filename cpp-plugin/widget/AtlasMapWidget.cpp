@@ -39,7 +39,28 @@ float srgb(float v) {
 
 QString errorText(const std::exception &e) { return QString::fromUtf8(e.what()); }
 
+// How far a pixel of predictive variance v is faded towards kFadeGrey: the
+// rule of `brdf-atlas map` (brdf_atlas_core::render::fade), 0 up to the
+// library's low-confidence threshold, rising linearly to kFadeMax at 1.
+constexpr float kFadeGrey = 0.2f;
+constexpr float kFadeMax = 0.75f;
+
+float fade(float v) {
+    const float low = float(BRDF_ATLAS_LOW_CONFIDENCE_VARIANCE);
+    return v > low ? kFadeMax * std::min(1.0f, (v - low) / (1.0f - low)) : 0.0f;
+}
+
 }  // namespace
+
+QRgb atlasPixel(const float *rgb, float variance) {
+    const float t = fade(variance);
+    int c[3];
+    for (int k = 0; k < 3; ++k) {
+        const float v = std::min(std::max(rgb[k], 0.0f), 1.0f);
+        c[k] = int(std::lround(255 * srgb(v + t * (kFadeGrey - v))));
+    }
+    return qRgb(c[0], c[1], c[2]);
+}
 
 bool atlasWriteMerl(const AtlasReconstruction &r, const QString &path, QString *error) {
     auto fail = [&](const QString &why) {
@@ -217,13 +238,13 @@ AtlasMapView::MapResult AtlasMapView::computeMap(std::shared_ptr<const brdf_atla
     out.generation = generation;
     try {
         const std::vector<float> rgb = model->albedo_map(width, height, win);
+        const std::vector<float> variance = model->variance_map(width, height, win);
         QImage image(width, height, QImage::Format_RGB32);
         for (int y = 0; y < height; ++y) {
             QRgb *line = reinterpret_cast<QRgb *>(image.scanLine(y));
             for (int x = 0; x < width; ++x) {
-                const float *c = &rgb[3 * (std::size_t(y) * width + x)];
-                line[x] = qRgb(int(std::lround(255 * srgb(c[0]))), int(std::lround(255 * srgb(c[1]))),
-                               int(std::lround(255 * srgb(c[2]))));
+                const std::size_t p = std::size_t(y) * width + x;
+                line[x] = atlasPixel(&rgb[3 * p], variance[p]);
             }
         }
         out.image = image;
@@ -451,7 +472,10 @@ AtlasPanel::AtlasPanel(QWidget *parent)
     save_->setEnabled(false);
     updateCoordinates();
 
-    connect(view_, &AtlasMapView::markerChanged, this, [this] { updateCoordinates(); });
+    connect(view_, &AtlasMapView::markerChanged, this, [this] {
+        updateCoordinates();
+        sayConfidence();
+    });
     connect(validate_, &QPushButton::clicked, this, &AtlasPanel::validatePoint);
     connect(save_, &QPushButton::clicked, this, &AtlasPanel::saveDialog);
     connect(openWatcher_, &QFutureWatcher<Opened>::finished, this, [this] {
@@ -509,6 +533,26 @@ void AtlasPanel::fail(const QString &message) {
     status_->setStyleSheet(QStringLiteral("color: #c03030"));
     status_->setText(message);
     emit failed(message);
+}
+
+void AtlasPanel::sayConfidence() {
+    std::shared_ptr<const brdf_atlas::Model> model = view_->model();
+    if (!model || !view_->hasMarker() || busy()) return;
+    const QPointF m = view_->marker();
+    try {
+        const double v = model->variance(m.x(), m.y());  // no pass over the store
+        status_->setStyleSheet(QString());
+        if (v > BRDF_ATLAS_LOW_CONFIDENCE_VARIANCE) {
+            status_->setText(
+                QStringLiteral("The model knows little here (predictive variance %1 of 1): the "
+                               "material is mostly the database's mean, faded on the map.")
+                    .arg(v, 0, 'f', 2));
+        } else {
+            status_->setText(QStringLiteral("Click the map, then Validate."));
+        }
+    } catch (const std::exception &e) {
+        fail(errorText(e));
+    }
 }
 
 void AtlasPanel::updateCoordinates() {

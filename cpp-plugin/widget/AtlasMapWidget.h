@@ -56,6 +56,11 @@ Q_DECLARE_METATYPE(AtlasReconstruction)
 /// failure returns false and sets `*error` to one line naming the file.
 bool atlasWriteMerl(const AtlasReconstruction &r, const QString &path, QString *error);
 
+/// A map pixel as the panel shows it: linear albedo `rgb` (3 floats) faded
+/// towards grey where the predictive variance is above
+/// BRDF_ATLAS_LOW_CONFIDENCE_VARIANCE (the rule of `brdf-atlas map`), sRGB.
+QRgb atlasPixel(const float *rgb, float variance);
+
 /// The map canvas.
 class AtlasMapView : public QWidget {
     Q_OBJECT
@@ -214,6 +219,8 @@ signals:
 
 private:
     void updateCoordinates();
+    /// Say in the status line whether the model knows much at the marker.
+    void sayConfidence();
     void setBusy(bool busy, const QString &what);
     void fail(const QString &message);
     QString nameFor(double x, double y) const;

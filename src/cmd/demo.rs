@@ -203,6 +203,7 @@ fn draw_map(state: &mut State) -> Result<(), Error> {
         samples: None,
         view: None,
         no_labels: false,
+        no_key: false,
     };
     indented(|out| map::draw(model, &args, out))
 }

@@ -13,7 +13,9 @@ use crate::format::point;
 
 /// Find where MERL files land in a fitted latent space.
 ///
-/// For each file: the latent point whose reconstruction is closest to it,
+/// For each file: the latent point whose reconstruction is closest to it
+/// (searched over the whole latent plane, not only the fit's box; a point
+/// outside the map's default view is said to be),
 /// the error of that reconstruction against the material's own spread
 /// around the mean, and the three nearest materials of the model. The
 /// files must have the model's dims. A file that cannot be read gets one
@@ -59,7 +61,21 @@ pub fn write_located(
         .take(3)
         .map(|&(i, d)| format!("{} ({d:.4})", model.names()[i]))
         .collect();
-    writeln!(out, "  nearest  {}", nearest.join(", "))
+    writeln!(out, "  nearest  {}", nearest.join(", "))?;
+    if !l.in_default_view() {
+        let [x, y] = [l.point[0], l.point[1]];
+        let w = 0.1 + x.abs().max(y.abs()).max(1.0);
+        writeln!(
+            out,
+            "  outside the map's default view ({}): see it with `map --view={},{},{},{}`",
+            crate::args::default_view(),
+            -w.ceil(),
+            w.ceil(),
+            -w.ceil(),
+            w.ceil()
+        )?;
+    }
+    Ok(())
 }
 
 /// Run `locate`: a report per readable file, one `error:` line per other

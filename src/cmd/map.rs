@@ -9,8 +9,8 @@ use std::time::Instant;
 
 use brdf_atlas_core::Model;
 use brdf_atlas_core::limits::MAX_MAP_SIDE;
-use brdf_atlas_core::render::{self, Picture};
-use brdf_atlas_core::{AlbedoMethod, DEFAULT_SAMPLES, View};
+use brdf_atlas_core::render::{self, Picture, Style};
+use brdf_atlas_core::{AlbedoMethod, DEFAULT_SAMPLES, LOW_CONFIDENCE_VARIANCE, View};
 use brdf_atomic::commit_all;
 
 use crate::args;
@@ -24,10 +24,13 @@ pub const DEFAULT_CONTOURS: u32 = 12;
 /// Draw the albedo map of a 2-D latent space.
 ///
 /// Each pixel is a latent point coloured by the albedo of the material
-/// there; luminance contour lines and the model's materials (dots with
-/// names) are drawn on top. Writes an sRGB PNG, a JSON sidecar with the
-/// view window, the pixel <-> latent mapping and the material points,
-/// and on request a linear float EXR. For a `raw` model the albedo is
+/// there, faded towards grey where the model knows little (the GP's
+/// predictive variance above 0.5); luminance contour lines, the model's
+/// materials (dots, names that never overlap, with leader lines where
+/// needed), latent-axis ticks and a luminance key are drawn on top. Writes
+/// an sRGB PNG, a JSON sidecar with the view window, the pixel <-> latent
+/// mapping, the material points, the label boxes and the confidence rule,
+/// and on request a linear float EXR (RGB and the variance in V). For a `raw` model the albedo is
 /// blended exactly from the materials' albedos; for `log` each pixel is
 /// integrated from quadrature samples (--samples, default 256).
 #[derive(Debug, Clone, clap::Args)]
@@ -57,6 +60,10 @@ pub struct Args {
     /// Do not write material names beside their points.
     #[arg(long)]
     pub no_labels: bool,
+    /// Draw neither the colour key nor the latent-axis ticks (maps smaller
+    /// than 200 pixels a side never have them).
+    #[arg(long)]
+    pub no_key: bool,
 }
 
 /// `--samples`' help, with the core's default.
@@ -155,10 +162,14 @@ pub fn draw(model: &Model, args: &Args, report: &mut impl Write) -> Result<(), E
             model.file().transform.name()
         ),
     };
-    let picture = Picture::new(model, map, args.contours as usize);
+    let style = Style {
+        labels: !args.no_labels,
+        key: !args.no_key,
+    };
+    let picture = Picture::styled(model, map, args.contours as usize, style);
     let sidecar = picture.sidecar(model.path());
     // Every output is complete on disk before any replaces an old one.
-    let mut staged = vec![render::stage_png(&args.png, &picture, !args.no_labels)?];
+    let mut staged = vec![render::stage_png(&args.png, &picture)?];
     if let Some(exr) = &args.exr {
         staged.push(render::stage_exr(exr, &picture.map)?);
     }
@@ -177,17 +188,37 @@ pub fn draw(model: &Model, args: &Args, report: &mut impl Write) -> Result<(), E
     let [lo, hi] = sidecar.luminance_range;
     writeln!(
         report,
-        "  luminance {lo:.4} .. {hi:.4}, {} contour lines, {} materials marked",
+        "  luminance {lo:.4} .. {hi:.4}, {} contour lines, {} materials marked, {} labelled",
         picture.levels.len(),
-        picture.references.len()
+        picture.references.len(),
+        sidecar.labels.len()
+    )?;
+    let variance = &picture.map.variance;
+    let low = variance
+        .iter()
+        .filter(|&&v| f64::from(v) > LOW_CONFIDENCE_VARIANCE)
+        .count();
+    let (vlo, vhi) = variance
+        .iter()
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    writeln!(
+        report,
+        "  predictive variance {vlo:.4} .. {vhi:.4}; above {LOW_CONFIDENCE_VARIANCE} (the model knows little, faded towards grey) on {:.1}% of the map",
+        100.0 * low as f64 / variance.len().max(1) as f64
     )?;
     writeln!(report, "  wrote {} (sRGB)", args.png.display())?;
     if let Some(exr) = &args.exr {
-        writeln!(report, "  wrote {} (linear float RGB)", exr.display())?;
+        writeln!(
+            report,
+            "  wrote {} (linear float RGB, predictive variance in V)",
+            exr.display()
+        )?;
     }
     writeln!(
         report,
-        "  wrote {} (view, pixel <-> latent mapping, material points)",
+        "  wrote {} (view, pixel <-> latent mapping, material points, label boxes, confidence rule)",
         json.display()
     )?;
     Ok(())
@@ -218,6 +249,7 @@ mod tests {
             samples: None,
             view: None,
             no_labels: false,
+            no_key: false,
         })
     }
 

@@ -11,4 +11,5 @@ pub mod locate;
 pub mod map;
 pub mod reconstruct;
 pub mod report;
+pub mod swatches;
 pub mod synth;

@@ -13,6 +13,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let t = std::time::Instant::now();
     let map = model.albedo_map(size, size, View::default(), samples, &NoProgress)?;
     println!("map {:?}", t.elapsed());
-    write_png(args[2].as_ref(), &Picture::new(&model, map, 12), true)?;
+    write_png(args[2].as_ref(), &Picture::new(&model, map, 12))?;
     Ok(())
 }

@@ -51,12 +51,12 @@ pub use model::{
     FitOptions, FitRecord, FitReport, Model, ModelFile, StoreRef, fit_dir, store_path_for,
 };
 pub use progress::{NoProgress, Progress};
-pub use query::render;
 pub use query::{
     AlbedoMap, AlbedoMethod, Blend, BlendRule, Confidence, DEFAULT_SAMPLES,
     LOW_CONFIDENCE_VARIANCE, Located, Plausibility, Segment, View, contour_levels, contours,
     luminance,
 };
+pub use query::{render, sheet, swatch};
 pub use simd::fastlog;
 
 // The unit tests run under the counting allocator, so `heap` is tested as a

@@ -36,6 +36,11 @@ pub const BRDF_ATLAS_MAX_MAP_SIDE: usize = 16384;
 /// view is [-w, w]^2 around the fitted materials' box [-1, 1]^2.
 pub const BRDF_ATLAS_DEFAULT_VIEW_HALF_WIDTH: f64 = 1.1;
 
+/// Above this predictive variance (`brdf_atlas_model_confidence`,
+/// `brdf_atlas_model_variance_map`) the model knows little: the data explain
+/// less than half of what the material there could be.
+pub const BRDF_ATLAS_LOW_CONFIDENCE_VARIANCE: f64 = 0.5;
+
 /// The largest quadrature sample count a map accepts (2^24): more would only
 /// take hours.
 pub const BRDF_ATLAS_MAX_SAMPLES: usize = 1 << 24;
@@ -72,4 +77,5 @@ const _: () = {
     assert!(BRDF_ATLAS_LATENT_LIMIT == limits::LATENT_LIMIT);
     assert!(BRDF_ATLAS_MAX_MAP_SIDE == limits::MAX_MAP_SIDE);
     assert!(BRDF_ATLAS_DEFAULT_VIEW_HALF_WIDTH == limits::DEFAULT_VIEW_HALF_WIDTH);
+    assert!(BRDF_ATLAS_LOW_CONFIDENCE_VARIANCE == brdf_atlas_core::LOW_CONFIDENCE_VARIANCE);
 };

@@ -50,6 +50,8 @@ unsafe fn map_from(rgb: *const f32, width: usize, height: usize) -> Result<Albed
         height,
         view: View::default(),
         rgb: rgb.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+        // Contours read the albedo only.
+        variance: vec![0.0; width * height],
         method: AlbedoMethod::Linear,
     })
 }

@@ -50,9 +50,10 @@ pub mod query;
 pub mod status;
 
 pub use consts::{
-    BRDF_ATLAS_DEFAULT_VIEW_HALF_WIDTH, BRDF_ATLAS_LATENT_LIMIT, BRDF_ATLAS_MAX_MAP_SIDE,
-    BRDF_ATLAS_MAX_MATERIALS, BRDF_ATLAS_MAX_Q, BRDF_ATLAS_MAX_SAMPLES, BRDF_ATLAS_VERSION_MAJOR,
-    BRDF_ATLAS_VERSION_MINOR, BRDF_ATLAS_VERSION_PATCH,
+    BRDF_ATLAS_DEFAULT_VIEW_HALF_WIDTH, BRDF_ATLAS_LATENT_LIMIT,
+    BRDF_ATLAS_LOW_CONFIDENCE_VARIANCE, BRDF_ATLAS_MAX_MAP_SIDE, BRDF_ATLAS_MAX_MATERIALS,
+    BRDF_ATLAS_MAX_Q, BRDF_ATLAS_MAX_SAMPLES, BRDF_ATLAS_VERSION_MAJOR, BRDF_ATLAS_VERSION_MINOR,
+    BRDF_ATLAS_VERSION_PATCH,
 };
 pub use contour::{BrdfAtlasSegment, brdf_atlas_contour_levels, brdf_atlas_contours};
 pub use model::{
@@ -68,7 +69,7 @@ pub use plausibility::{
 pub use query::{
     BrdfAtlasLocation, brdf_atlas_model_albedo_map, brdf_atlas_model_eval,
     brdf_atlas_model_eval_batch, brdf_atlas_model_locate, brdf_atlas_model_reconstruct,
-    brdf_atlas_model_reconstruct_to_file, brdf_atlas_model_weights,
+    brdf_atlas_model_reconstruct_to_file, brdf_atlas_model_variance_map, brdf_atlas_model_weights,
 };
 pub use status::{
     BrdfAtlasStatus, brdf_atlas_last_error_message, brdf_atlas_status_message, brdf_atlas_version,

@@ -312,9 +312,61 @@ pub unsafe extern "C" fn brdf_atlas_model_albedo_map(
     })
 }
 
+/// The GP's predictive variance (`1 - k(x)^T K^-1 k(x)`: 0 at an input
+/// material, 1 where the data say nothing, above 0.5 the model knows
+/// little) at every pixel of a `width` x `height` image of `view`, laid out
+/// as `brdf_atlas_model_albedo_map` lays out its pixels, one float a pixel:
+/// pixel (px, py) is at `buf[py * width + px]`. A map picture fades where it
+/// is high. No pass over the store: much cheaper than the albedo map.
+///
+/// `view` NULL means the model's default window.
+///
+/// Ownership: `model` and `view` are borrowed; `buf` is caller-owned, `len`
+/// floats (at least width * height), written on success only.
+///
+/// Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (zero size or more than
+/// `BRDF_ATLAS_MAX_MAP_SIDE` a side, view not finite or empty), UNSUPPORTED
+/// (the model is not 2-D), BUFFER_TOO_SMALL.
+///
+/// # Safety
+/// `model` is NULL or a live handle; `view` is NULL or valid for reading;
+/// `buf` is NULL or valid for writing `len` floats.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn brdf_atlas_model_variance_map(
+    model: *const BrdfAtlasModel,
+    width: usize,
+    height: usize,
+    view: *const BrdfAtlasView,
+    buf: *mut f32,
+    len: usize,
+) -> BrdfAtlasStatus {
+    run("brdf_atlas_model_variance_map", || {
+        let m = unsafe { handle::borrow(model) }?;
+        check::planar(m)?;
+        let view: View = match unsafe { check::input(view, 1, "view") } {
+            Ok(v) => v[0].into(),
+            Err(f) if f.status == BrdfAtlasStatus::NullArgument => View::default(),
+            Err(f) => return Err(f),
+        };
+        view.check()?;
+        let max = BRDF_ATLAS_MAX_MAP_SIDE;
+        if width == 0 || height == 0 || width > max || height > max {
+            return Err(Failure::invalid(format!(
+                "map size {width}x{height} must be between 1 and {max} a side"
+            )));
+        }
+        let values = check::product(&[width, height], "map size")?;
+        let out = unsafe { check::buffer(buf, len, values, "buf") }?;
+        out.copy_from_slice(&m.variance_map(width, height, view)?);
+        m.verify()?;
+        Ok(())
+    })
+}
+
 /// Find where the MERL file at `merl_path` lands in the model's latent
 /// plane: the point whose reconstruction matches it best, searched over the
-/// box [-1, 1]^2. The file must have the model's dims.
+/// whole plane (it may lie outside the box [-1, 1]^2 the inputs were fitted
+/// in, and outside the default view). The file must have the model's dims.
 ///
 /// Ownership: `model` and `merl_path` are borrowed; `*location` is written
 /// on success only.

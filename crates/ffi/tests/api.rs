@@ -120,3 +120,42 @@ fn misaligned_buffers_are_refused_untouched() {
     };
     assert_eq!(s, BrdfAtlasStatus::InvalidArgument);
 }
+
+#[test]
+fn the_variance_map_is_the_confidence_of_each_pixel() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = fit(tmp.path(), 2, TransformKind::Log);
+    let h = Handle::open(&path);
+    let (w, ht) = (9, 6);
+    let view = BrdfAtlasView {
+        x0: -3.0,
+        x1: 2.0,
+        y0: -2.5,
+        y1: 2.5,
+    };
+    let mut small = vec![0.0f32; w * ht - 1];
+    let s = unsafe {
+        brdf_atlas_model_variance_map(h.0, w, ht, &view, small.as_mut_ptr(), small.len())
+    };
+    assert_eq!(s, BrdfAtlasStatus::BufferTooSmall);
+    let mut v = vec![0.0f32; w * ht];
+    let s = unsafe { brdf_atlas_model_variance_map(h.0, w, ht, &view, v.as_mut_ptr(), v.len()) };
+    assert_eq!(s, BrdfAtlasStatus::Ok, "{}", last_error());
+    let core_view: View = View {
+        x0: view.x0,
+        x1: view.x1,
+        y0: view.y0,
+        y1: view.y1,
+    };
+    for py in 0..ht {
+        for px in 0..w {
+            let [x, y] = core_view.pixel_to_latent(px as f64, py as f64, w, ht);
+            let mut want = 0.0;
+            let s = unsafe { brdf_atlas_model_confidence(h.0, x, y, &mut want, null_mut()) };
+            assert_eq!(s, BrdfAtlasStatus::Ok);
+            let got = v[py * w + px] as f64;
+            assert!((got - want).abs() < 1e-6, "({px}, {py}): {got} vs {want}");
+        }
+    }
+    assert!(v.iter().any(|&x| x > 0.5) && v.iter().any(|&x| x < 0.5));
+}

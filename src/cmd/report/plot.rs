@@ -15,7 +15,8 @@ use super::measure::{LooRow, Results, SampleRow};
 use super::write_file;
 use crate::error::Error;
 
-static FONT: &[u8] = include_bytes!("../../../assets/DejaVuSans.ttf");
+/// The font the map pictures draw with too (embedded once, in the core).
+static FONT: &[u8] = brdf_atlas_core::render::FONT;
 
 const WIDTH: u32 = 720;
 const HEIGHT: u32 = 440;

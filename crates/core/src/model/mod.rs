@@ -170,6 +170,16 @@ impl Model {
         self.llt.solve(b.as_ref())
     }
 
+    /// `K^-1` (noise included), column-major `N x N`.
+    pub(crate) fn k_inverse(&self) -> Vec<f64> {
+        let inv = self.llt.inverse();
+        let n = inv.nrows();
+        (0..n)
+            .flat_map(|j| (0..n).map(move |i| (i, j)))
+            .map(|(i, j)| inv[(i, j)])
+            .collect()
+    }
+
     /// The Gram matrix `Y = Z Z^T` of the stored (centred, transformed) data.
     pub fn gram(&self) -> &Mat<f64> {
         &self.gram

@@ -5,8 +5,15 @@
 //! `|z - Z^T w(x)|^2 = |z|^2 - 2 w(x)^T b + w(x)^T Y w(x)` with `b = Z z`.
 //! The new material enters only through `b` (its dot products with the `N`
 //! inputs: one streaming pass) and `|z|^2`; every candidate `x` then costs
-//! O(N^2). The search: a coarse grid over the box (or the training points
-//! when `q > 2`), then Hooke-Jeeves refinement.
+//! O(N^2). The search covers the whole latent plane, not only the fit's box
+//! `[-1, 1]^q`: a material unlike every input may be matched best beyond
+//! it. Far from every input the kernel vanishes and the reconstruction
+//! decays to the mean material, so the error there flattens to `|z|^2` and
+//! the optimum is finite: within a few length scales of the inputs. The
+//! search: the training points, a fine grid over the box and a coarser one
+//! over the inputs' bounding box widened by [`REACH`] length scales (in the
+//! plane, `q = 2`), then Hooke-Jeeves refinement, unconstrained but for
+//! that widened box.
 
 use brdf_merl::MerlFile;
 
@@ -14,7 +21,13 @@ use crate::error::{CoreError, Result};
 use crate::gplvm::kernel::rows_of;
 use crate::gplvm::optim::BOX;
 use crate::model::Model;
+use crate::query::map::View;
 use crate::simd::fold::ordered_blocks;
+
+/// How many length scales beyond the inputs the search reaches: there the
+/// kernel is below `e^-(REACH^2 / 2)` (3e-4), so the reconstruction is the
+/// mean material to that share, and moving further changes nothing.
+pub const REACH: f64 = 4.0;
 
 /// Where a material lands.
 #[derive(Debug, Clone, PartialEq)]
@@ -27,6 +40,18 @@ pub struct Located {
     pub spread: f64,
     /// Input materials by latent distance from the point, nearest first: (index, distance).
     pub nearest: Vec<(usize, f64)>,
+}
+
+impl Located {
+    /// Does the point lie in the map's default view ([`View::default`])?
+    /// (Always `true` beyond two dimensions, where there is no map.)
+    pub fn in_default_view(&self) -> bool {
+        let v = View::default();
+        match self.point[..] {
+            [x, y] => (v.x0..=v.x1).contains(&x) && (v.y0..=v.y1).contains(&y),
+            _ => true,
+        }
+    }
 }
 
 impl Model {
@@ -92,15 +117,25 @@ impl Model {
         };
         let q = self.q();
         let latent = self.latent();
+        // The inputs' bounding box (the fit's box at least), widened by REACH length scales.
+        let reach = REACH * self.file().kernel.length_scale;
+        let bounds: Vec<(f64, f64)> = (0..q)
+            .map(|c| {
+                let (lo, hi) = (0..n).fold((BOX.0, BOX.1), |(lo, hi), i| {
+                    (lo.min(latent[(i, c)]), hi.max(latent[(i, c)]))
+                });
+                (lo - reach, hi + reach)
+            })
+            .collect();
         let mut candidates = rows_of(latent.as_ref());
         if q == 2 {
-            let g = 33;
-            for a in 0..g {
-                for c in 0..g {
-                    let f = |k: usize| BOX.0 + (BOX.1 - BOX.0) * k as f64 / (g - 1) as f64;
-                    candidates.push(vec![f(a), f(c)]);
-                }
-            }
+            let grid = |g: usize, (x0, x1): (f64, f64), (y0, y1): (f64, f64)| {
+                let f =
+                    move |k: usize, lo: f64, hi: f64| lo + (hi - lo) * k as f64 / (g - 1) as f64;
+                (0..g * g).map(move |k| vec![f(k / g, x0, x1), f(k % g, y0, y1)])
+            };
+            candidates.extend(grid(33, BOX, BOX));
+            candidates.extend(grid(41, bounds[0], bounds[1]));
         }
         let mut best = candidates
             .iter()
@@ -114,7 +149,7 @@ impl Model {
             for c in 0..q {
                 for sign in [1.0, -1.0] {
                     let mut x = best.1.clone();
-                    x[c] = (x[c] + sign * step).clamp(BOX.0, BOX.1);
+                    x[c] = (x[c] + sign * step).clamp(bounds[c].0, bounds[c].1);
                     let e = error(&x);
                     if e < best.0 {
                         best = (e, x);

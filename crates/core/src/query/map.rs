@@ -17,13 +17,12 @@
 
 use brdf_merl::Quadrature;
 use faer::Mat;
-
-use crate::dense::product::matmul;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::data::store::Rows;
 use crate::data::transform::InverseForm;
+use crate::dense::product::matmul;
 use crate::error::{CoreError, Result};
 use crate::model::Model;
 use crate::progress::Progress;
@@ -120,6 +119,10 @@ pub struct AlbedoMap {
     pub view: View,
     /// Linear RGB albedo, `width * height`, row-major.
     pub rgb: Vec<[f32; 3]>,
+    /// The GP's predictive variance `1 - k(x)^T K^-1 k(x)` of each pixel's
+    /// latent point, `width * height`: 0 at an input material, 1 where the
+    /// data say nothing (see [`crate::Confidence`]).
+    pub variance: Vec<f32>,
     /// How it was computed.
     pub method: AlbedoMethod,
 }
@@ -241,31 +244,12 @@ impl Model {
         }
         view.check()?;
         self.store().verify_cheap()?;
-        let kernel = self.file().kernel;
-        let latent = self.latent();
-        let n = latent.nrows();
-        // The RBF is separable: k(x, y)_i = e^(-(x - x_i)^2 / 2l^2) e^(-(y - y_i)^2 / 2l^2),
-        // so one factor per pixel column and one per pixel row (N each) give
-        // every pixel's k(x) with N multiplications and no exponential.
-        let inv2l2 = 1.0 / (2.0 * kernel.length_scale * kernel.length_scale);
-        let factors = |count: usize, axis: usize, centre: &dyn Fn(usize) -> f64| -> Vec<f64> {
-            let mut f = vec![0.0; count * n];
-            for (k, out) in f.chunks_exact_mut(n).enumerate() {
-                let c = centre(k);
-                for (i, o) in out.iter_mut().enumerate() {
-                    let d = latent[(i, axis)] - c;
-                    *o = (-d * d * inv2l2).exp();
-                }
-            }
-            f
-        };
-        let ex = factors(width, 0, &|px| {
-            view.pixel_to_latent(px as f64, 0.0, width, height)[0]
-        });
-        let ey = factors(height, 1, &|py| {
-            view.pixel_to_latent(0.0, py as f64, width, height)[1]
-        });
+        let n = self.latent().nrows();
+        let (ex, ey) = self.kernel_factors(width, height, view);
         let mut rgb = vec![[0.0f32; 3]; width * height];
+        let mut variance = vec![0.0f32; width * height];
+        let inv = self.k_inverse();
+        let kernel_row = |py: usize| kernel_row(&ex, &ey, n, py);
         progress.start("map", height as u64);
         let method = match samples {
             None => {
@@ -278,19 +262,23 @@ impl Model {
                 let (cols, m) = self.linear_basis();
                 // albedo(x, y)_c = m_c + sum_i ex_i(x) (ey_i(y) B_ic): per row, the
                 // column factors meet one N-vector per channel.
-                rgb.par_chunks_mut(width).enumerate().for_each(|(py, row)| {
-                    let ey = &ey[py * n..(py + 1) * n];
-                    let v: Vec<Vec<f64>> = cols
-                        .iter()
-                        .map(|col| ey.iter().zip(col).map(|(e, b)| e * b).collect())
-                        .collect();
-                    for (out, ex) in row.iter_mut().zip(ex.chunks_exact(n)) {
-                        for (o, (v, mc)) in out.iter_mut().zip(v.iter().zip(*m)) {
-                            *o = (mc + dot::dot(v, ex)) as f32;
+                rgb.par_chunks_mut(width)
+                    .zip(variance.par_chunks_mut(width))
+                    .enumerate()
+                    .for_each(|(py, (row, var))| {
+                        variances(&inv, &kernel_row(py), n, var);
+                        let ey = &ey[py * n..(py + 1) * n];
+                        let v: Vec<Vec<f64>> = cols
+                            .iter()
+                            .map(|col| ey.iter().zip(col).map(|(e, b)| e * b).collect())
+                            .collect();
+                        for (out, ex) in row.iter_mut().zip(ex.chunks_exact(n)) {
+                            for (o, (v, mc)) in out.iter_mut().zip(v.iter().zip(*m)) {
+                                *o = (mc + dot::dot(v, ex)) as f32;
+                            }
                         }
-                    }
-                    progress.advance(1);
-                });
+                        progress.advance(1);
+                    });
                 AlbedoMethod::Linear
             }
             Some(s) => {
@@ -334,37 +322,34 @@ impl Model {
                     .collect();
                 let mean: Vec<f64> = rows.iter().map(|&(row, ..)| store.mean()[row]).collect();
                 let weight: Vec<f64> = rows.iter().map(|x| x.2).collect();
-                rgb.par_chunks_mut(width).enumerate().for_each(|(py, out)| {
-                    // k(x) of each pixel of the row, column-major n x width.
-                    let mut kx = vec![0.0f64; n * width];
-                    let ey = &ey[py * n..(py + 1) * n];
-                    for (ex, col) in ex.chunks_exact(n).zip(kx.chunks_exact_mut(n)) {
-                        for ((o, a), b) in col.iter_mut().zip(ex).zip(ey) {
-                            *o = a * b;
+                rgb.par_chunks_mut(width)
+                    .zip(variance.par_chunks_mut(width))
+                    .enumerate()
+                    .for_each(|(py, (out, var))| {
+                        let kx = kernel_row(py);
+                        let mut vbuf = vec![0.0f64; r * width];
+                        matmul(&mut vbuf, &c, &kx, n);
+                        let mut terms = vec![0.0f64; r];
+                        for (px, o) in out.iter_mut().enumerate() {
+                            let col = &vbuf[px * r..(px + 1) * r];
+                            // Element-wise first (vectorises), then a fixed-order sum.
+                            let it = terms.iter_mut().zip(&mean).zip(&weight).zip(col);
+                            if exponential {
+                                it.for_each(|(((o, m), w), t)| {
+                                    *o = w * (fastexp::exp(m + t) - 1.0).max(0.0)
+                                });
+                            } else {
+                                it.for_each(|(((o, m), w), t)| *o = w * (m + t).max(0.0));
+                            }
+                            let mut start = 0;
+                            for (ch, &end) in ends.iter().enumerate() {
+                                o[ch] = sum4(&terms[start..end]) as f32;
+                                start = end;
+                            }
                         }
-                    }
-                    let mut vbuf = vec![0.0f64; r * width];
-                    matmul(&mut vbuf, &c, &kx, n);
-                    let mut terms = vec![0.0f64; r];
-                    for (px, o) in out.iter_mut().enumerate() {
-                        let col = &vbuf[px * r..(px + 1) * r];
-                        // Element-wise first (vectorises), then a fixed-order sum.
-                        let it = terms.iter_mut().zip(&mean).zip(&weight).zip(col);
-                        if exponential {
-                            it.for_each(|(((o, m), w), t)| {
-                                *o = w * (fastexp::exp(m + t) - 1.0).max(0.0)
-                            });
-                        } else {
-                            it.for_each(|(((o, m), w), t)| *o = w * (m + t).max(0.0));
-                        }
-                        let mut start = 0;
-                        for (ch, &end) in ends.iter().enumerate() {
-                            o[ch] = sum4(&terms[start..end]) as f32;
-                            start = end;
-                        }
-                    }
-                    progress.advance(1);
-                });
+                        variances(&inv, &kx, n, var);
+                        progress.advance(1);
+                    });
                 AlbedoMethod::Quadrature {
                     samples: s,
                     bins: rule.len(),
@@ -378,9 +363,99 @@ impl Model {
             height,
             view,
             rgb,
+            variance,
             method,
         })
     }
+}
+
+/// The predictive variance `1 - |L^-1 k|^2` (`K = L L^T`) of each column `k`
+/// of `kx`, clamped to `[0, 1]`; `kx` is overwritten by `L^-1 kx`.
+fn variances(inv: &[f64], kx: &[f64], n: usize, out: &mut [f32]) {
+    // w = K^-1 k(x) for the whole row in one product, then k . w per pixel.
+    let mut w = vec![0.0f64; kx.len()];
+    matmul(&mut w, inv, kx, n);
+    for ((o, k), w) in out
+        .iter_mut()
+        .zip(kx.chunks_exact(n))
+        .zip(w.chunks_exact(n))
+    {
+        *o = (1.0 - dot::dot(k, w)).clamp(0.0, 1.0) as f32;
+    }
+}
+
+impl Model {
+    /// The separable RBF's factors of a `width x height` image of `view`:
+    /// `k(x, y)_i = e^(-(x - x_i)^2 / 2l^2) e^(-(y - y_i)^2 / 2l^2)`, so one
+    /// factor per pixel column and one per pixel row (N each, column- and
+    /// row-major) give every pixel's `k(x)` with N multiplications and no
+    /// exponential.
+    fn kernel_factors(&self, width: usize, height: usize, view: View) -> (Vec<f64>, Vec<f64>) {
+        let kernel = self.file().kernel;
+        let latent = self.latent();
+        let n = latent.nrows();
+        let inv2l2 = 1.0 / (2.0 * kernel.length_scale * kernel.length_scale);
+        let factors = |count: usize, axis: usize, centre: &dyn Fn(usize) -> f64| -> Vec<f64> {
+            let mut f = vec![0.0; count * n];
+            for (k, out) in f.chunks_exact_mut(n).enumerate() {
+                let c = centre(k);
+                for (i, o) in out.iter_mut().enumerate() {
+                    let d = latent[(i, axis)] - c;
+                    *o = (-d * d * inv2l2).exp();
+                }
+            }
+            f
+        };
+        let ex = factors(width, 0, &|px| {
+            view.pixel_to_latent(px as f64, 0.0, width, height)[0]
+        });
+        let ey = factors(height, 1, &|py| {
+            view.pixel_to_latent(0.0, py as f64, width, height)[1]
+        });
+        (ex, ey)
+    }
+
+    /// The GP's predictive variance of every pixel of a `width x height`
+    /// image of `view` (row 0 at the top), as [`AlbedoMap::variance`] holds
+    /// it, without the albedo: no pass over the store, O(N^2) a pixel.
+    pub fn variance_map(&self, width: usize, height: usize, view: View) -> Result<Vec<f32>> {
+        if self.q() != 2 {
+            return Err(CoreError::BadQuery(format!(
+                "a map needs a 2-D latent space, this model has q = {}",
+                self.q()
+            )));
+        }
+        let max = crate::limits::MAX_MAP_SIDE;
+        if width == 0 || height == 0 || width > max || height > max {
+            return Err(CoreError::BadQuery(format!(
+                "map size {width}x{height} must be between 1 and {max} a side"
+            )));
+        }
+        view.check()?;
+        let n = self.latent().nrows();
+        let (ex, ey) = self.kernel_factors(width, height, view);
+        let inv = self.k_inverse();
+        let mut variance = vec![0.0f32; width * height];
+        variance
+            .par_chunks_mut(width)
+            .enumerate()
+            .for_each(|(py, out)| variances(&inv, &kernel_row(&ex, &ey, n, py), n, out));
+        Ok(variance)
+    }
+}
+
+/// `k(x)` of every pixel of row `py`, one column a pixel, from the factors
+/// of [`Model::kernel_factors`].
+fn kernel_row(ex: &[f64], ey: &[f64], n: usize, py: usize) -> Vec<f64> {
+    // Column-major n x width: one column a pixel.
+    let mut kx = vec![0.0f64; ex.len()];
+    let ey = &ey[py * n..(py + 1) * n];
+    for (ex, col) in ex.chunks_exact(n).zip(kx.chunks_exact_mut(n)) {
+        for ((o, a), b) in col.iter_mut().zip(ex).zip(ey) {
+            *o = a * b;
+        }
+    }
+    kx
 }
 
 /// Sum with four interleaved partial sums: vectorisable, and the same bits every time.

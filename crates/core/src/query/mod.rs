@@ -1,13 +1,21 @@
 //! What a fitted model answers: the material at a latent point, where a new
-//! material lands, albedo maps with their contours, and their pictures.
+//! material lands, albedo maps with their contours, and their pictures;
+//! lit spheres of materials and sheets of them.
 
 pub(crate) mod budget;
 pub mod contour;
+mod decor;
+mod labels;
 pub mod locate;
 pub mod map;
+mod overlay;
+mod paint;
 pub mod plausibility;
 pub mod reconstruct;
 pub mod render;
+pub mod sheet;
+mod sidecar;
+pub mod swatch;
 
 pub use contour::{Segment, contour_levels, contours, luminance};
 pub use locate::Located;

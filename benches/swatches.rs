@@ -1,0 +1,47 @@
+//! Benchmark of `brdf-atlas swatches`' work: an 8 x 8 sheet of 128-pixel
+//! lit spheres over the map's default view (point queries, shading, layout).
+//!
+//! Model: the file named by `BRDF_ATLAS_BENCH_MODEL` (e.g. the 100
+//! NBRDF-derived materials, log transform), or else one fitted before timing
+//! to the data of `common::data_dir`. Run with `cargo bench --bench swatches`.
+
+mod common;
+
+use std::hint::black_box;
+
+use brdf_atlas_core::swatch::DEFAULT_LIGHTS;
+use brdf_atlas_core::{FitOptions, GplvmParams, Model, NoProgress, Precision, TransformKind};
+use brdf_atlas_core::{View, fit_dir, sheet};
+use criterion::{Criterion, criterion_group, criterion_main};
+
+fn swatches(c: &mut Criterion) {
+    let tmp = tempfile::tempdir().expect("temporary directory");
+    let model = match std::env::var_os("BRDF_ATLAS_BENCH_MODEL") {
+        Some(path) => Model::open(path).expect("open BRDF_ATLAS_BENCH_MODEL"),
+        None => {
+            let data = common::data_dir(tmp.path());
+            let out = tmp.path().join("log.atlas");
+            let options = FitOptions {
+                params: GplvmParams::new(2).check().expect("defaults"),
+                transform: TransformKind::Log,
+                precision: Precision::F32,
+            };
+            fit_dir(&data, &out, &options, &NoProgress).expect("fit");
+            Model::open(out).expect("open model")
+        }
+    };
+    let points = sheet::grid_points(&View::default(), 8);
+    let mut g = c.benchmark_group("swatches");
+    g.sample_size(10);
+    g.bench_function("sheet_8x8_128px", |b| {
+        b.iter(|| {
+            let s = sheet::swatches(&model, black_box(&points), None, 128, &DEFAULT_LIGHTS)
+                .expect("swatches");
+            sheet::compose(&s, 8)
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, swatches);
+criterion_main!(benches);
