@@ -128,7 +128,10 @@ fn fit_map_reconstruct_and_locate_nbrdf_materials() {
     assert!(out.status.success(), "locate: {stderr}");
     let x = point_after_at(stdout.lines().next().unwrap());
     assert!(x.iter().all(|v| (-1.1..=1.1).contains(v)), "{stdout}");
-    assert!(!stdout.contains("outside the map's default view"), "{stdout}");
+    assert!(
+        !stdout.contains("outside the map's default view"),
+        "{stdout}"
+    );
     let name = files[0].file_stem().unwrap().to_str().unwrap();
     let nearest = stdout
         .lines()
