@@ -120,12 +120,18 @@ fn fit_map_reconstruct_and_locate_nbrdf_materials() {
     table.copy_raw(0, &mut raw);
     assert!(raw.iter().all(|&v| v >= 0.0 || v == -1.0));
 
-    // An input material lands in the box, next to itself.
+    // An input material lands next to itself: in the default view (the
+    // search covers the whole plane, so one on the box's edge may land a
+    // hair beyond it), nearest to itself.
     let out = brdf_atlas([Path::new("locate"), &model, &files[0]]);
     let (stdout, stderr) = texts(&out);
     assert!(out.status.success(), "locate: {stderr}");
     let x = point_after_at(stdout.lines().next().unwrap());
-    assert!(x.iter().all(|v| (-1.0..=1.0).contains(v)), "{stdout}");
+    assert!(x.iter().all(|v| (-1.1..=1.1).contains(v)), "{stdout}");
+    assert!(
+        !stdout.contains("outside the map's default view"),
+        "{stdout}"
+    );
     let name = files[0].file_stem().unwrap().to_str().unwrap();
     let nearest = stdout
         .lines()

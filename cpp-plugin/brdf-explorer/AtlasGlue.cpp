@@ -29,7 +29,11 @@ void brdfAtlasAttach( ParameterWindow* paramWnd, QGridLayout* layout, int row )
     layout->addWidget( panel, row, 0, 1, 2 );
 
     QObject::connect( panel, &AtlasPanel::modelOpened, panel, [panel]() { panel->setVisible( true ); } );
-    QObject::connect( panel, &AtlasPanel::failed, panel, []( const QString& m ) {
+    // A failure is shown where the artist looks: the panel (hidden until a
+    // model opens, so a model that fails to open, at start-up too, would
+    // otherwise say nothing) comes up with the message in its status line.
+    QObject::connect( panel, &AtlasPanel::failed, panel, [panel]( const QString& m ) {
+        panel->setVisible( true );
         fprintf( stderr, "brdf-atlas: %s\n", qPrintable( m ) );
     } );
     QObject::connect( panel, &AtlasPanel::reconstructed, paramWnd,

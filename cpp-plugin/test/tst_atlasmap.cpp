@@ -3,6 +3,7 @@
 // for the reconstruction off the GUI thread, and check the table against
 // the C library called directly (bit for bit), then save it and compare
 // with the library's own writer byte for byte. Grabs the widget to a PNG.
+// Every way a model fails to open is shown in the panel, naming the file.
 // Zoomed far out, the map fades where the model knows little, by the
 // library's rule, and a click there says so in the status line.
 // Last, a second panel on a copy of the model whose store is rewritten in
@@ -303,6 +304,52 @@ private slots:
                  qPrintable(panel_->statusLabel()->text()));
         view_->setWindow(centre, scale);
         waitForMap();
+    }
+
+    void openFailuresAreShownNamingTheFile() {
+        // Each way a model fails to open: the panel's status line (red) and
+        // the failed signal carry one message naming the file at fault and
+        // what is wrong with it; no model is shown.
+        QTemporaryDir dir;
+        QVERIFY(dir.isValid());
+        const QString name = QFileInfo(modelPath_).fileName();
+        auto copyModel = [&](const QString &sub) {
+            QDir(dir.path()).mkpath(sub);
+            const QString m = dir.filePath(sub + "/" + name);
+            if (!QFile::copy(modelPath_, m)) qFatal("cannot copy the model");
+            return m;
+        };
+        const QString missing = dir.filePath("missing.atlas");
+        const QString text = dir.filePath("notes.atlas");
+        rewriteInPlace(text, "these are notes, not a model\n");
+        const QString noStore = copyModel("nostore");
+        const QString shortStore = copyModel("short");
+        QVERIFY(QFile::copy(modelPath_ + ".store", shortStore + ".store"));
+        QVERIFY(QFile::resize(shortStore + ".store", 100));
+        struct Case {
+            QString path, culprit, what;
+        };
+        const QList<Case> cases = {
+            {missing, "missing.atlas", "No such file"},
+            {text, "notes.atlas", "not"},
+            {noStore, name + ".store", "No such file"},
+            {shortStore, name + ".store", ""},
+        };
+        for (const Case &c : cases) {
+            AtlasPanel panel;
+            panel.resize(360, 460);
+            panel.show();
+            QSignalSpy opened(&panel, &AtlasPanel::modelOpened);
+            QSignalSpy failed(&panel, &AtlasPanel::failed);
+            panel.openModel(c.path);
+            QTRY_VERIFY_WITH_TIMEOUT(failed.count() + opened.count() > 0 && !panel.busy(), 60000);
+            QCOMPARE(opened.count(), 0);
+            const QString message = failed.first().first().toString();
+            QVERIFY2(message.contains(c.culprit) && message.contains(c.what), qPrintable(message));
+            QCOMPARE(panel.statusLabel()->text(), message);
+            QVERIFY(panel.statusLabel()->styleSheet().contains("c03030"));
+            QVERIFY(!panel.mapView()->model());
+        }
     }
 
     void storeRewrittenWhileOpenIsShownAndRecovered() {

@@ -48,8 +48,8 @@ fn a_lambertian_sphere_is_shaded_by_the_cosine() {
                     l.intensity * ((n[0] * d[0] + n[1] * d[1] + n[2] * d[2]) / len).max(0.0)
                 })
                 .sum();
-            for c in 0..3 {
-                let want = rho[c] * shade;
+            for (c, r) in rho.iter().enumerate() {
+                let want = r * shade;
                 let got = sphere.radiance[p][c] as f64;
                 assert!(
                     (got - want).abs() <= 1e-6 + 1e-6 * want,
