@@ -223,8 +223,29 @@ fn hard_cases_stay_finite() {
     std::fs::copy(&first, twins.join("zz-twin.binary")).unwrap();
     let two = tmp.path().join("two");
     synth::write_dir(&two, 2, DIMS, 11).unwrap();
+    // A chrome-like mirror (a highlight above 1e4 1/sr) beside the synthetic
+    // materials, and a material with the outer third of the theta_h axis
+    // unmeasured.
+    let hard = tmp.path().join("hard");
+    synth::write_dir(&hard, 4, DIMS, 13).unwrap();
+    let chrome = brdf_merl::synth::Analytic {
+        diffuse: [0.0; 3],
+        f0: [0.95, 0.95, 0.95],
+        alpha: 0.004,
+    }
+    .table(DIMS);
+    let peak = (0..DIMS.bins())
+        .filter_map(|b| chrome.value(0, b))
+        .fold(0.0, f64::max);
+    assert!(peak > 1e4, "the mirror's highlight is {peak}");
+    chrome.write(hard.join("zz-chrome.binary")).unwrap();
+    let holes = brdf_merl::MerlTable::from_fn(DIMS, |b| {
+        let (ih, _, _) = DIMS.unbin(b);
+        (ih * 90 < DIMS.theta_h * 60).then_some([0.1, 0.2, 0.3])
+    });
+    holes.write(hard.join("zz-holes.binary")).unwrap();
     // Two materials allow one latent dimension.
-    for (dir, name, q) in [(&twins, "twins", 2), (&two, "two", 1)] {
+    for (dir, name, q) in [(&twins, "twins", 2), (&two, "two", 1), (&hard, "hard", 2)] {
         let model = tmp.path().join(format!("{name}.atlas"));
         let options = FitOptions {
             params: GplvmParams::new(q).check().unwrap(),
