@@ -1,35 +1,49 @@
 #!/usr/bin/env bash
-# Apply the brdf-atlas plugin to a BRDF Explorer source tree (github
-# wdas/brdf, qmake, Qt 5):
+# Build the brdf-atlas plugin into BRDF Explorer (github wdas/brdf, qmake,
+# Qt 5) out of tree: the upstream checkout is only read, never written.
 #
-#     cpp-plugin/apply.sh BRDF_SRC_DIR [LIBDIR]
+#     cpp-plugin/apply.sh BRDF_SRC_DIR BUILD_DIR [LIBDIR]
 #
+# - copies the upstream tree (without .git) into BUILD_DIR, refreshing an
+#   earlier copy (files keep their times, so make rebuilds only what changed);
 # - copies the plugin's own files (the map widget, BRDFReconstructed, the
-#   glue, the C headers) into BRDF_SRC_DIR/src/brdf/brdf-atlas/, and writes
+#   glue, the C headers) into BUILD_DIR/src/brdf/brdf-atlas/, and writes
 #   brdf-atlas-paths.pri there with LIBDIR, the directory holding
 #   libbrdf_atlas_c.so (default: this workspace's target/release, or
 #   $CARGO_TARGET_DIR/release);
-# - inserts our own lines (each ends with "// brdf-atlas" or "# brdf-atlas")
-#   after named anchor lines of five upstream files (brdf.pro,
-#   BRDFMeasuredMERL.h, ParameterWindow.h, ParameterWindow.cpp,
-#   MainWindow.cpp; the list below). Nothing upstream is
-#   changed or removed. An anchor that is missing or not unique stops the
-#   script with a message and nothing is written (upstream moved: update the
-#   anchors here).
-# Running it again changes nothing (lines already there are not repeated).
+# - in the copy, inserts our own lines (each ends with "// brdf-atlas" or
+#   "# brdf-atlas") after named anchor lines of five upstream files
+#   (brdf.pro, BRDFMeasuredMERL.h, ParameterWindow.h, ParameterWindow.cpp,
+#   MainWindow.cpp; the list below). Nothing is changed or removed. An
+#   anchor that is missing or not unique stops the script with a message
+#   (upstream moved: update the anchors here);
+# - writes src/data/sphere.obj in the copy if upstream lacks it (some
+#   mirrors do; the "Lit Object" view loads it).
+# Then: cd BUILD_DIR && qmake && make. Running it again changes nothing
+# that is not needed.
 set -euo pipefail
 
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 root=$(cd "$here/.." && pwd)
-if [ $# -lt 1 ] || [ $# -gt 2 ]; then
-    echo "usage: $0 BRDF_SRC_DIR [LIBDIR]" >&2
+if [ $# -lt 2 ] || [ $# -gt 3 ]; then
+    echo "usage: $0 BRDF_SRC_DIR BUILD_DIR [LIBDIR]" >&2
     exit 2
 fi
-src=$(cd "$1" && pwd)/src/brdf
-libdir=${2:-${CARGO_TARGET_DIR:-$root/target}/release}
+upstream=$(cd "$1" && pwd) || { echo "apply.sh: $1: no such directory" >&2; exit 1; }
+[ -f "$upstream/src/brdf/brdf.pro" ] || { echo "apply.sh: $upstream/src/brdf/brdf.pro: missing; is $1 a wdas/brdf checkout?" >&2; exit 1; }
+build=$(realpath -m "$2")
+case "$build/" in
+    "$upstream"/*) echo "apply.sh: $build is inside $upstream; build out of tree (another directory), so the checkout stays untouched" >&2; exit 1 ;;
+esac
+mkdir -p "$build"
+# A fresh copy of every upstream file (an earlier run's edits are replaced,
+# then made again below); tar keeps the files' times.
+(cd "$upstream" && tar --exclude=./.git -cf - .) | (cd "$build" && tar -xf -)
+src=$build/src/brdf
+libdir=${3:-${CARGO_TARGET_DIR:-$root/target}/release}
 libdir=$(cd "$libdir" 2>/dev/null && pwd) || { echo "apply.sh: $libdir: no such directory (build the C library: cargo build --release -p brdf-atlas-ffi)" >&2; exit 1; }
 for f in brdf.pro ParameterWindow.h ParameterWindow.cpp MainWindow.cpp BRDFMeasuredMERL.h; do
-    [ -f "$src/$f" ] || { echo "apply.sh: $src/$f: missing; is $1 a wdas/brdf checkout?" >&2; exit 1; }
+    [ -f "$src/$f" ] || { echo "apply.sh: $upstream/src/brdf/$f: missing; is $1 a wdas/brdf checkout?" >&2; exit 1; }
 done
 [ -f "$libdir/libbrdf_atlas_c.so" ] || echo "apply.sh: note: $libdir/libbrdf_atlas_c.so does not exist yet (cargo build --release -p brdf-atlas-ffi)" >&2
 
@@ -95,3 +109,9 @@ mkdir -p "$dest"
 cp "$here"/widget/AtlasMapWidget.{h,cpp} "$here"/brdf-explorer/*.{h,cpp,pri} "$root"/include/brdf_atlas.{h,hpp} "$dest"/
 printf '# Written by cpp-plugin/apply.sh: where libbrdf_atlas_c.so is.\nBRDF_ATLAS_LIBDIR = %s\n' "$libdir" > "$dest/brdf-atlas-paths.pri"
 echo "apply.sh: plugin files in $dest (library from $libdir)"
+if [ ! -s "$build/src/data/sphere.obj" ]; then
+    mkdir -p "$build/src/data"
+    python3 "$here/make-sphere-obj.py" "$build/src/data/sphere.obj"
+    echo "apply.sh: wrote $build/src/data/sphere.obj (upstream has none)"
+fi
+echo "apply.sh: now cd $build && qmake prefix=PREFIX && make -j2 && make install"

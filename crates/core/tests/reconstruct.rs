@@ -308,7 +308,9 @@ fn a_near_twin_lands_next_to_its_twin() {
             mats[k].name
         );
         assert!(found.rmse < 0.5 * found.spread, "{found:?}");
-        assert!(found.point.iter().all(|v| v.abs() <= 1.0));
+        // The search covers the plane: the twin of a material on the box's
+        // edge may land a little beyond it, but not out of the map's view.
+        assert!(found.in_default_view(), "{found:?}");
     }
     // Wrong dims: a clear error.
     let odd = tmp.path().join("odd.binary");

@@ -92,8 +92,8 @@ fn paper(at: [f32; 2], s: &str, px: f32) -> Rect {
 
 /// Ticks at round latent values along the bottom (x) and left (y) edges of
 /// a `width x height` picture of `view`; those whose number would leave the
-/// picture or meet another are dropped.
-pub fn axis_ticks(view: &View, width: usize, height: usize, px: f32) -> Vec<Tick> {
+/// picture, meet another or cover one of the `dots` are dropped.
+pub fn axis_ticks(view: &View, width: usize, height: usize, px: f32, dots: &[Rect]) -> Vec<Tick> {
     let (w, h) = (width as f32, height as f32);
     let mut out: Vec<Tick> = Vec::new();
     let step = nice_step(view.x1 - view.x0);
@@ -133,7 +133,9 @@ pub fn axis_ticks(view: &View, width: usize, height: usize, px: f32) -> Vec<Tick
     let inside = |r: &Rect| r[0] >= 0.0 && r[1] >= 0.0 && r[2] <= w && r[3] <= h;
     let mut kept: Vec<Tick> = Vec::new();
     for t in out {
-        if inside(&t.rect) && !kept.iter().any(|k| overlaps(&k.rect, &t.rect)) {
+        let clear = !kept.iter().any(|k| overlaps(&k.rect, &t.rect))
+            && !dots.iter().any(|d| overlaps(d, &t.rect));
+        if inside(&t.rect) && clear {
             kept.push(t);
         }
     }
@@ -335,7 +337,7 @@ mod tests {
         assert_eq!(number(1.0, 0.5), "1.0");
         assert_eq!(number(-0.0, 0.5), "0.0");
         assert_eq!(number(0.25, 0.25), "0.25");
-        let ticks = axis_ticks(&view, 768, 768, 12.0);
+        let ticks = axis_ticks(&view, 768, 768, 12.0, &[]);
         let xs: Vec<&str> = ticks
             .iter()
             .filter(|t| t.mark[0][1] == 768.0)

@@ -92,7 +92,7 @@ impl Overlay {
             .collect();
         let decorated = style.key && width.min(height) >= MIN_DECORATED_SIDE;
         let ticks = if decorated {
-            decor::axis_ticks(view, width, height, px)
+            decor::axis_ticks(view, width, height, px, &dots)
         } else {
             Vec::new()
         };
