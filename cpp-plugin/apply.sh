@@ -5,7 +5,8 @@
 #     cpp-plugin/apply.sh BRDF_SRC_DIR BUILD_DIR [LIBDIR]
 #
 # - copies the upstream tree (without .git) into BUILD_DIR, refreshing an
-#   earlier copy (files keep their times, so make rebuilds only what changed);
+#   earlier copy (files keep their times: make rebuilds what changed and
+#   what includes the five edited files);
 # - copies the plugin's own files (the map widget, BRDFReconstructed, the
 #   glue, the C headers) into BUILD_DIR/src/brdf/brdf-atlas/, and writes
 #   brdf-atlas-paths.pri there with LIBDIR, the directory holding

@@ -1,6 +1,8 @@
 // BRDFReconstructed.cpp: see BRDFReconstructed.h.
 #include "BRDFReconstructed.h"
 
+#include <algorithm>
+
 BRDFReconstructed* BRDFReconstructed::create( const AtlasReconstruction& r, QString* error )
 {
     // BRDF Explorer's measured shader indexes the MERL layout at 90 x 90 x 180.
@@ -13,25 +15,26 @@ BRDFReconstructed* BRDFReconstructed::create( const AtlasReconstruction& r, QStr
                          .arg( r.modelPath ).arg( r.dims.theta_h ).arg( r.dims.theta_d ).arg( r.dims.phi_d );
         return NULL;
     }
-    return new BRDFReconstructed( r );
+    auto floats = std::make_shared<std::vector<float> >( r.table->begin(), r.table->end() );
+    return new BRDFReconstructed( r, std::move( floats ) );
 }
 
-BRDFReconstructed::BRDFReconstructed( const AtlasReconstruction& r )
-    : recon( r )
+BRDFReconstructed::BRDFReconstructed( const AtlasReconstruction& r,
+                                      std::shared_ptr<const std::vector<float> > s )
+    : recon( r ), samples( std::move( s ) )
 {
-    // What BRDFMeasuredMERL::loadMERLData does with a file's data, from the
-    // table in memory: the name, the sample count and the float copy that
-    // initGL uploads (and frees).
+    recon.table.reset();
+    // What BRDFMeasuredMERL::loadMERLData does with a file's data: the name,
+    // the sample count and the float copy that initGL uploads (and frees).
     name = r.name.toStdString();
-    numBRDFSamples = int( r.table->size() / 3 );
-    brdfData = new float[ r.table->size() ];
-    for( std::size_t i = 0; i < r.table->size(); i++ )
-        brdfData[i] = float( (*r.table)[i] );
+    numBRDFSamples = int( samples->size() / 3 );
+    brdfData = new float[ samples->size() ];
+    std::copy( samples->begin(), samples->end(), brdfData );
 }
 
 BRDFBase* BRDFReconstructed::cloneBRDF( bool resetToDefaults )
 {
-    BRDFReconstructed* b = new BRDFReconstructed( recon );
+    BRDFReconstructed* b = new BRDFReconstructed( recon, samples );
     if( !resetToDefaults )
         syncParametersIntoBRDF( b );
     return b;

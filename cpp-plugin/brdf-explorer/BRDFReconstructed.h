@@ -6,6 +6,8 @@
 #define BRDF_RECONSTRUCTED_H
 
 #include <QString>
+#include <memory>
+#include <vector>
 
 #include "../BRDFMeasuredMERL.h"
 #include "AtlasMapWidget.h"
@@ -21,11 +23,19 @@ public:
     // bits as the first time), keeping the parameters unless asked not to.
     virtual BRDFBase* cloneBRDF( bool resetToDefaults );
 
+    // Where the material came from (its table is not kept: see `samples`).
     const AtlasReconstruction& reconstruction() const { return recon; }
 
 private:
-    explicit BRDFReconstructed( const AtlasReconstruction& r );
+    BRDFReconstructed( const AtlasReconstruction& r,
+                       std::shared_ptr<const std::vector<float> > samples );
+    // `r` without its table: the doubles (35 MB at 90 x 90 x 180) are the
+    // panel's, for Save .binary, and are freed when it moves on.
     AtlasReconstruction recon;
+    // The one copy this BRDF keeps: the table as the floats BRDF Explorer
+    // draws (17.5 MB), shared with its reloads. initGL uploads brdfData (a
+    // copy of it) and frees that copy, as for a MERL file.
+    std::shared_ptr<const std::vector<float> > samples;
 };
 
 #endif
