@@ -29,14 +29,7 @@ const BLOCK: usize = 1024;
 /// [`crate::loo::CONVEX_LENGTH_RATIO`].
 pub fn convex_predictor(kernel: &Kernel, latent: MatRef<'_, f64>) -> Result<Mat<f64>> {
     let n = latent.nrows();
-    if n < 2 {
-        return Err(ParamError::TooFewMaterials {
-            method: "leave-one-out",
-            needs: 2,
-            got: n,
-        }
-        .into());
-    }
+    super::predictors::needs_two(n)?;
     let pts = rows_of(latent);
     let rows: Vec<Vec<f64>> = (0..n)
         .map(|i| convex_weights(&pts, &pts[i], kernel.length_scale, Some(i)))

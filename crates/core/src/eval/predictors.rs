@@ -11,13 +11,8 @@ use crate::error::{CoreError, ParamError, Result};
 use crate::gplvm::kernel::Kernel;
 use crate::gplvm::likelihood::factor;
 
-/// The GP leave-one-out predictor of latent points `latent` (`N x q`).
-pub fn gp_predictor(
-    kernel: &Kernel,
-    latent: MatRef<'_, f64>,
-    refit_mean: bool,
-) -> Result<Mat<f64>> {
-    let n = latent.nrows();
+/// Leave-one-out needs at least two materials (one held out, one to predict it).
+pub(super) fn needs_two(n: usize) -> Result<()> {
     if n < 2 {
         return Err(ParamError::TooFewMaterials {
             method: "leave-one-out",
@@ -26,6 +21,17 @@ pub fn gp_predictor(
         }
         .into());
     }
+    Ok(())
+}
+
+/// The GP leave-one-out predictor of latent points `latent` (`N x q`).
+pub fn gp_predictor(
+    kernel: &Kernel,
+    latent: MatRef<'_, f64>,
+    refit_mean: bool,
+) -> Result<Mat<f64>> {
+    let n = latent.nrows();
+    needs_two(n)?;
     let (_, a) = factor(kernel.matrix(latent).as_ref(), "leave-one-out")?;
     let g: Vec<f64> = (0..n)
         .map(|i| (0..n).map(|j| a[(i, j)]).sum::<f64>() / a[(i, i)])

@@ -230,19 +230,7 @@ impl Model {
         samples: Option<usize>,
         progress: &dyn Progress,
     ) -> Result<AlbedoMap> {
-        if self.q() != 2 {
-            return Err(CoreError::BadQuery(format!(
-                "a map needs a 2-D latent space, this model has q = {}",
-                self.q()
-            )));
-        }
-        let max = crate::limits::MAX_MAP_SIDE;
-        if width == 0 || height == 0 || width > max || height > max {
-            return Err(CoreError::BadQuery(format!(
-                "map size {width}x{height} must be between 1 and {max} a side"
-            )));
-        }
-        view.check()?;
+        self.check_map_request(width, height, view)?;
         self.store().verify_cheap()?;
         let n = self.latent().nrows();
         let (ex, ey) = self.kernel_factors(width, height, view);
@@ -415,10 +403,9 @@ impl Model {
         (ex, ey)
     }
 
-    /// The GP's predictive variance of every pixel of a `width x height`
-    /// image of `view` (row 0 at the top), as [`AlbedoMap::variance`] holds
-    /// it, without the albedo: no pass over the store, O(N^2) a pixel.
-    pub fn variance_map(&self, width: usize, height: usize, view: View) -> Result<Vec<f32>> {
+    /// A map needs a 2-D model, a size within [`crate::limits::MAX_MAP_SIDE`]
+    /// a side and a finite, non-empty view.
+    fn check_map_request(&self, width: usize, height: usize, view: View) -> Result<()> {
         if self.q() != 2 {
             return Err(CoreError::BadQuery(format!(
                 "a map needs a 2-D latent space, this model has q = {}",
@@ -431,7 +418,14 @@ impl Model {
                 "map size {width}x{height} must be between 1 and {max} a side"
             )));
         }
-        view.check()?;
+        view.check()
+    }
+
+    /// The GP's predictive variance of every pixel of a `width x height`
+    /// image of `view` (row 0 at the top), as [`AlbedoMap::variance`] holds
+    /// it, without the albedo: no pass over the store, O(N^2) a pixel.
+    pub fn variance_map(&self, width: usize, height: usize, view: View) -> Result<Vec<f32>> {
+        self.check_map_request(width, height, view)?;
         let n = self.latent().nrows();
         let (ex, ey) = self.kernel_factors(width, height, view);
         let inv = self.k_inverse();
