@@ -45,8 +45,15 @@ use crate::gplvm::kernel::Kernel;
 use crate::gplvm::likelihood::{GramData, factor};
 use crate::simd::symmetric::{quadform, rank2_update, symv};
 
-/// Relative cost drift allowed between refactorisations; the refresh interval adapts to keep under it.
-const TARGET_DRIFT: f64 = 1e-10;
+/// Relative cost drift aimed at between refactorisations; the refresh
+/// interval adapts to keep near it.
+///
+/// A third of the 1e-9 the tests hold the state to: the drift of a chain of
+/// updates is only seen at its end, so the target needs that margin. On 200
+/// synthetic materials 1e-10 refactorised after every 7.5 accepted moves
+/// (4171 factorisations, half the search's time), 3e-10 after every 32
+/// (980), with the same moves and the same final cost.
+const TARGET_DRIFT: f64 = 3e-10;
 
 /// Below this `g2` the update is numerically unreliable: evaluate densely instead.
 const MIN_DENOMINATOR: f64 = 1e-8;
