@@ -172,3 +172,106 @@ fn report_writes_every_file_and_fails_atomically() {
     assert_eq!(fail.status.code(), Some(1));
     assert!(stderr.contains("not a brdf-atlas report"), "{stderr}");
 }
+
+/// `--growth` fits synthetic databases of each size with both optimisers;
+/// its Hooke-Jeeves cost is the one `fit` reaches on the same materials
+/// written by `synth` (a separate path: files, the store pass, the CLI).
+#[test]
+fn growth_section_matches_fit_on_the_same_materials() {
+    let tmp = tempfile::tempdir().unwrap();
+    let merl = tmp.path().join("merl");
+    let made = brdf_atlas([
+        "synth".as_ref(),
+        "--count".as_ref(),
+        "4".as_ref(),
+        "--dims".as_ref(),
+        "8,8,16".as_ref(),
+        merl.as_os_str(),
+    ]);
+    assert!(made.status.success(), "{:?}", texts(&made));
+    let rep = tmp.path().join("rep");
+    let run = brdf_atlas([
+        "report".as_ref(),
+        merl.as_os_str(),
+        "-o".as_ref(),
+        rep.as_os_str(),
+        "--quick".as_ref(),
+        "--growth".as_ref(),
+        "12,30".as_ref(),
+    ]);
+    let (stdout, stderr) = texts(&run);
+    assert!(run.status.success(), "{stdout}\n{stderr}");
+    let md = std::fs::read_to_string(rep.join("report.md")).unwrap();
+    assert!(
+        md.contains("## Growth with the number of materials"),
+        "{md}"
+    );
+    assert!(rep.join("growth.png").is_file());
+    let csv = std::fs::read_to_string(rep.join("growth.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    let sizes: Vec<(&str, &str)> = rows.iter().map(|r| (r[0], r[1])).collect();
+    assert_eq!(
+        sizes,
+        [
+            ("12", "hooke-jeeves"),
+            ("12", "lbfgs"),
+            ("30", "hooke-jeeves"),
+            ("30", "lbfgs")
+        ]
+    );
+    // The 30-material Hooke-Jeeves fit again, through `synth` and `fit`.
+    let same = tmp.path().join("same");
+    let made = brdf_atlas([
+        "synth".as_ref(),
+        "--count".as_ref(),
+        "30".as_ref(),
+        "--dims".as_ref(),
+        "16,16,32".as_ref(),
+        same.as_os_str(),
+    ]);
+    assert!(made.status.success(), "{:?}", texts(&made));
+    let model = tmp.path().join("same.atlas");
+    let fit = brdf_atlas([
+        "fit".as_ref(),
+        same.as_os_str(),
+        "-o".as_ref(),
+        model.as_os_str(),
+    ]);
+    let (stdout, stderr) = texts(&fit);
+    assert!(fit.status.success(), "{stdout}\n{stderr}");
+    // `cost   A -> B (...)`: B, printed with 7 significant digits or more.
+    let line = stdout
+        .lines()
+        .find(|l| l.trim_start().starts_with("cost"))
+        .unwrap();
+    let printed: f64 = line
+        .split("->")
+        .nth(1)
+        .unwrap()
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let reported: f64 = rows[2][3].parse().unwrap();
+    assert!(
+        (printed - reported).abs() <= 1e-6 * reported.abs(),
+        "fit printed {printed}, the report {reported}"
+    );
+    // Sizes out of range are refused with the option named.
+    let bad = brdf_atlas([
+        "report".as_ref(),
+        merl.as_os_str(),
+        "-o".as_ref(),
+        tmp.path().join("bad").as_os_str(),
+        "--growth".as_ref(),
+        "2".as_ref(),
+    ]);
+    let (_, stderr) = texts(&bad);
+    assert_eq!(bad.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("--growth"), "{stderr}");
+}

@@ -230,6 +230,7 @@ fn write_report(state: &mut State) -> Result<(), Error> {
         q_max: None,
         quick: true,
         optimizer: OptimizerArg::Lbfgs,
+        growth: Vec::new(),
     };
     let mut sink = Vec::new();
     let summary = report::write(&args, &mut sink)?;

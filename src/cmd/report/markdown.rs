@@ -63,7 +63,8 @@ pub fn write(
     fits(w, r)?;
     maps(w, plan, r)?;
     super::plausible::markdown(w, r)?;
-    precision(w, r)
+    precision(w, r)?;
+    super::growth::markdown(w, r)
 }
 
 /// Leave-one-out errors of the GPLVM and PCA by latent dimension.

@@ -125,6 +125,8 @@ pub struct Results {
     /// The plausibility grid of each transform's q = 2 model, row by row
     /// from the top, under each rule.
     pub plausibility: Vec<PlausibilityRow>,
+    /// Fits of synthetic databases by size (`--growth`).
+    pub growth: Vec<super::growth::GrowthRow>,
 }
 
 impl Results {

@@ -11,6 +11,7 @@
 //! and an earlier report stays until the new one is complete.
 
 mod csv;
+mod growth;
 mod markdown;
 mod measure;
 mod plan;
@@ -63,7 +64,15 @@ pub struct Args {
     /// maps and the precision comparison use the Hooke-Jeeves fit, `fit`'s default).
     #[arg(long, value_enum, default_value_t = OptimizerArg::Lbfgs)]
     pub optimizer: OptimizerArg,
+    /// Also time fits of synthetic databases of these sizes (16 x 16 x 32
+    /// bins, both optimisers), e.g. `--growth 100,200,400,1000`: how the
+    /// fit grows with the number of materials.
+    #[arg(long, value_name = "N,N,...", value_delimiter = ',', value_parser = clap::value_parser!(u32).range(3..=MAX_GROWTH as i64))]
+    pub growth: Vec<u32>,
 }
+
+/// Largest synthetic database `--growth` fits.
+const MAX_GROWTH: usize = 5000;
 
 /// What the demo and `run` print at the end.
 pub struct Summary {
@@ -126,6 +135,8 @@ pub fn write(args: &Args, say: &mut dyn Write) -> Result<Summary, Error> {
     drop(bars);
     let mut steps = Steps::new(start, say);
     measure::measure(&data, &plan, &work, &mut steps, &mut r)?;
+    let sizes: Vec<usize> = args.growth.iter().map(|&n| n as usize).collect();
+    growth::measure(&sizes, &work, &mut steps, &mut r)?;
     std::fs::remove_dir_all(&work).map_err(|source| Error::Write { path: work, source })?;
 
     steps.say("writing tables and plots")?;
@@ -134,6 +145,10 @@ pub fn write(args: &Args, say: &mut dyn Write) -> Result<Summary, Error> {
     plausible::csv(dir, &r)?;
     plot::all(dir, &r)?;
     plausible::picture(dir, &r, plan.plausibility_grid)?;
+    if !r.growth.is_empty() {
+        growth::csv(dir, &r)?;
+        growth::picture(dir, &r)?;
+    }
     let total = start.elapsed();
     let load_end = machine::load_average();
     write_file(&dir.join("report.md"), |w| {

@@ -22,19 +22,19 @@ const WIDTH: u32 = 720;
 const HEIGHT: u32 = 440;
 
 /// A series: name, colour, points (already on the plotted scale), markers only?
-struct Series {
-    name: String,
-    color: RGBColor,
-    points: Vec<(f64, f64)>,
-    markers_only: bool,
+pub struct Series {
+    pub name: String,
+    pub color: RGBColor,
+    pub points: Vec<(f64, f64)>,
+    pub markers_only: bool,
 }
 
 /// One axis: label and whether values are log10 of the data.
-struct Axis<'a> {
-    label: &'a str,
-    log: bool,
+pub struct Axis<'a> {
+    pub label: &'a str,
+    pub log: bool,
     /// Integer data (ticks on whole numbers only).
-    integer: bool,
+    pub integer: bool,
 }
 
 /// A plot that could not be drawn is an output that could not be written.
@@ -65,7 +65,7 @@ fn tick(v: f64, log: bool) -> String {
     }
 }
 
-const COLORS: [RGBColor; 6] = [
+pub const COLORS: [RGBColor; 6] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
     RGBColor(44, 160, 44),
@@ -74,7 +74,7 @@ const COLORS: [RGBColor; 6] = [
     RGBColor(23, 190, 207),
 ];
 
-fn chart(path: &Path, title: &str, x: Axis, y: Axis, series: &[Series]) -> Result<(), Error> {
+pub fn chart(path: &Path, title: &str, x: Axis, y: Axis, series: &[Series]) -> Result<(), Error> {
     let pts: Vec<(f64, f64)> = series
         .iter()
         .flat_map(|s| s.points.iter().copied())
