@@ -55,6 +55,10 @@ use crate::simd::symmetric::{quadform, quadform2, rank2_update, symv, symv2};
 /// (980), with the same moves and the same final cost.
 const TARGET_DRIFT: f64 = 3e-10;
 
+/// Accepted moves before the first drift measurement; the interval then
+/// adapts, up to the caller's `refresh_every`.
+const FIRST_INTERVAL: u64 = 16;
+
 /// Below this `g2` the update is numerically unreliable: evaluate densely instead.
 const MIN_DENOMINATOR: f64 = 1e-8;
 
@@ -287,7 +291,7 @@ impl<'a> IncrementalCost<'a> {
             logdet: 0.0,
             trace: 0.0,
             max_interval: refresh_every.max(1),
-            interval: refresh_every.max(1),
+            interval: refresh_every.clamp(1, FIRST_INTERVAL),
             since_refresh: 0,
             stats: DriftStats::default(),
             slots: [Slot::new(n, q), Slot::new(n, q)],

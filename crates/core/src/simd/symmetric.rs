@@ -88,48 +88,29 @@ fn quadform_avx2(a: &[f64], x: &[f64], s: &mut [f64]) -> f64 {
 
 /// [`symv`] of two vectors in one pass over `A`, the same bits as two
 /// calls: where `A` does not fit in the core's cache (N above about 350 on
-/// a 2 MB L2), reading it is the product's cost. From [`SPLIT_FROM`]
-/// columns on, two threads take half the columns each; every value is
-/// computed the same way whichever thread computes it.
+/// a 2 MB L2), reading it is the product's cost.
+///
+/// Sequential: a product takes 10 to 100 us, and handing half of one to
+/// another thread (rayon's `join`) made a 400-material search spend a
+/// third of its time waking threads, more under load.
 pub fn symv2(a: &[f64], x: [&[f64]; 2], out: [&mut [f64]; 2]) {
     let n = x[0].len();
     assert_eq!(x[1].len(), n);
     let a = &a[..n * n];
     let [o0, o1] = out;
     let (o0, o1) = (&mut o0[..n], &mut o1[..n]);
-    if n >= SPLIT_FROM {
-        let mid = n / 2 / GROUP * GROUP;
-        let (o0, p0) = o0.split_at_mut(mid);
-        let (o1, p1) = o1.split_at_mut(mid);
-        rayon::join(
-            || symv2_columns(a, x, 0, [o0, o1]),
-            || symv2_columns(a, x, mid, [p0, p1]),
-        );
-    } else {
-        symv2_columns(a, x, 0, [o0, o1]);
-    }
+    symv2_columns(a, x, 0, [o0, o1]);
 }
 
 /// [`quadform`] of two vectors in one pass over `A`, the same bits as two
-/// calls; `scratch` (`n` values each) is overwritten. Split between two
-/// threads as [`symv2`] is.
+/// calls; `scratch` (`n` values each) is overwritten.
 pub fn quadform2(a: &[f64], x: [&[f64]; 2], scratch: [&mut [f64]; 2]) -> [f64; 2] {
     let n = x[0].len();
     assert_eq!(x[1].len(), n);
     let a = &a[..n * n];
     let [s0, s1] = scratch;
     let (s0, s1) = (&mut s0[..n], &mut s1[..n]);
-    if n >= SPLIT_FROM {
-        let mid = n / 2 / GROUP * GROUP;
-        let (s0, t0) = s0.split_at_mut(mid);
-        let (s1, t1) = s1.split_at_mut(mid);
-        rayon::join(
-            || quadform2_columns(a, x, 0, [s0, s1]),
-            || quadform2_columns(a, x, mid, [t0, t1]),
-        );
-    } else {
-        quadform2_columns(a, x, 0, [s0, s1]);
-    }
+    quadform2_columns(a, x, 0, [s0, s1]);
     [dot_fused(x[0], s0), dot_fused(x[1], s1)]
 }
 
@@ -145,11 +126,6 @@ fn dot_fused(x: &[f64], y: &[f64]) -> f64 {
     }
     dot4(x, y)
 }
-
-/// Size from which the two-vector kernels use two threads: at 256 a
-/// product is about 30 us of work, well above the cost of handing half of
-/// it to another thread.
-const SPLIT_FROM: usize = 256;
 
 /// Columns a pass of the two-vector kernels takes: four columns of two
 /// vectors keep eight accumulators, three loads and no spills in AVX2's

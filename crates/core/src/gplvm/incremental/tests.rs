@@ -137,12 +137,13 @@ fn colliding_points_and_tiny_noise_stay_finite() {
     }
 }
 
-/// A pair of trials gives the bits of two single trials, on both sides of
-/// the size from which its products use two threads, and accepting either
+/// A pair of trials gives the bits of two single trials (at a size where
+/// `K^-1` and `Y` fit in a core's cache and one where they do not on
+/// most), and accepting either
 /// of the pair leaves the state a single trial would.
 #[test]
 fn a_pair_of_trials_is_two_single_trials() {
-    for n in [9, 300] {
+    for n in [9, 600] {
         let (data, x) = problem(n, 400, 8);
         let kernel = Kernel::default();
         let mut pairs = IncrementalCost::new(kernel, &data, x.as_ref(), 64).unwrap();

@@ -43,7 +43,7 @@ impl Default for HookeJeeves {
             initial_step: 0.25,
             min_step: 1e-3,
             reduction: 0.5,
-            refresh_every: 64,
+            refresh_every: 1024,
             max_sweeps: 100_000,
         }
     }
