@@ -84,7 +84,8 @@ impl GplvmParams {
         self
     }
 
-    /// Hooke-Jeeves' refactorisation interval (accepted moves).
+    /// The longest Hooke-Jeeves' refactorisation interval (accepted moves;
+    /// the interval adapts to the measured drift below it).
     pub fn refresh_every(mut self, moves: u64) -> Self {
         self.hooke_jeeves.refresh_every = moves;
         self
