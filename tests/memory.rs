@@ -104,7 +104,8 @@ fn fit_and_queries_stay_under_512_mb_of_private_memory() {
     let png = tmp.path().join("map.png");
     let new = tmp.path().join("new.binary");
     let files = binaries(&data);
-    let runs: [Vec<&dyn AsRef<std::ffi::OsStr>>; 4] = [
+    let lbfgs = tmp.path().join("lbfgs.atlas");
+    let runs: [Vec<&dyn AsRef<std::ffi::OsStr>>; 5] = [
         vec![
             &"map",
             &model,
@@ -116,6 +117,7 @@ fn fit_and_queries_stay_under_512_mb_of_private_memory() {
             &"16",
         ],
         vec![&"reconstruct", &model, &"--at", &"0.1,-0.2", &"-o", &new],
+        vec![&"fit", &data, &"-o", &lbfgs, &"--optimizer", &"lbfgs"],
         vec![&"locate", &model, &files[0], &files[1]],
         vec![
             &"eval", &model, &"--at", &"0.3,0.3", &"--wi", &"0.5,0", &"--wo", &"0.5,3.1",

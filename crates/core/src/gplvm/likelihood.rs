@@ -13,6 +13,7 @@
 use faer::{Mat, MatRef};
 
 use crate::dense::Cholesky;
+use crate::dense::product::matmul;
 
 use crate::error::{CoreError, ParamError, Result};
 use crate::gplvm::kernel::Kernel;
@@ -104,6 +105,23 @@ pub fn trace_product(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> f64 {
     s
 }
 
+/// `A B A` for `n x n` matrices, through the library's own product
+/// ([`crate::dense::product::matmul`]; faer's would reserve a scratch of
+/// twice the reported L3 cache in the calling thread).
+fn sandwich(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
+    let n = a.nrows();
+    let columns = |m: MatRef<'_, f64>| -> Vec<f64> {
+        (0..n)
+            .flat_map(|j| (0..n).map(move |i| m[(i, j)]))
+            .collect()
+    };
+    let (a, b) = (columns(a), columns(b));
+    let (mut ab, mut aba) = (vec![0.0; n * n], vec![0.0; n * n]);
+    matmul(&mut ab, &a, &b, n);
+    matmul(&mut aba, &ab, &a, n);
+    Mat::from_fn(n, n, |i, j| aba[j * n + i])
+}
+
 /// The cost at latent points `x` (`N x q`), from scratch.
 pub fn cost(kernel: &Kernel, data: &GramData, x: MatRef<'_, f64>) -> Result<f64> {
     let k = kernel.matrix(x);
@@ -125,7 +143,7 @@ pub fn cost_and_gradient(
     let (logdet, inv) = factor(k.as_ref(), "dense gradient")?;
     let d = data.d as f64;
     let cost = 0.5 * d * logdet + 0.5 * trace_product(inv.as_ref(), data.y());
-    let kyk = &inv * data.y() * &inv;
+    let kyk = sandwich(inv.as_ref(), data.y());
     let l2 = kernel.length_scale * kernel.length_scale;
     let mut grad = Mat::<f64>::zeros(n, q);
     for i in 0..n {
