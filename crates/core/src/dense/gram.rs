@@ -23,11 +23,11 @@ pub fn syrk_lower_add(block: &[f64], len: usize, acc: &mut [f64]) {
     syrk(block, len, acc, false);
 }
 
-/// [`syrk_lower_add`] of the `n` columns of a lower-triangular matrix
-/// (`z_i` zero above row `i`; `len >= n`, so the rows may be padded): the
-/// same sums, with the groups of eight rows above each tile's first column
-/// left out (their products are exact zeros, and each value keeps its
-/// lane, so the bits are those of [`syrk_lower_add`]); about half the work.
+/// [`syrk_lower_add`] of a lower-triangular `n x n` matrix's columns
+/// (`len == n`, `z_i` zero above row `i`): the same sums, with the groups
+/// of eight rows above each tile's first column left out (their products
+/// are exact zeros, and each value keeps its lane, so the bits are those
+/// of [`syrk_lower_add`]); about half the work.
 pub fn syrk_lower_add_triangular(block: &[f64], len: usize, acc: &mut [f64]) {
     syrk(block, len, acc, true);
 }
