@@ -188,7 +188,7 @@ fn product<K: Kernel>(
     b: (*const f64, usize),
     pr: Product,
 ) {
-    assert!(pr.fits(c_len, a.1, b.1) && pr.m % PAD == 0 && pr.p % PAD == 0);
+    assert!(pr.fits(c_len, a.1, b.1) && pr.m.is_multiple_of(PAD) && pr.p.is_multiple_of(PAD));
     if pr.depth == 0 {
         return;
     }
@@ -519,9 +519,10 @@ unsafe fn tile_avx512<const V: usize>(
         let cp = c.add(pr.c + i0 + j0 * pr.ldc);
         let ap = a.add(pr.a + i0);
         let bp = b.add(pr.b + j0 * pr.bj);
-        let mut acc = [[_mm512_setzero_pd(); 8]; V];
-        for (v, row) in acc.iter_mut().enumerate() {
-            for (j, x) in row.iter_mut().enumerate() {
+        // acc[j][v]: column j, rows 8 v..8 v + 8 of the tile.
+        let mut acc = [[_mm512_setzero_pd(); V]; 8];
+        for (j, col) in acc.iter_mut().enumerate() {
+            for (v, x) in col.iter_mut().enumerate() {
                 *x = _mm512_loadu_pd(cp.add(8 * v + j * pr.ldc));
             }
         }
@@ -529,15 +530,15 @@ unsafe fn tile_avx512<const V: usize>(
             let ak = ap.add(k * pr.lda);
             let x: [__m512d; V] = std::array::from_fn(|v| _mm512_loadu_pd(ak.add(8 * v)));
             let bk = bp.add(k * pr.bk);
-            for j in 0..8 {
+            for (j, col) in acc.iter_mut().enumerate() {
                 let y = _mm512_set1_pd(*bk.add(j * pr.bj));
-                for v in 0..V {
-                    acc[v][j] = _mm512_fnmadd_pd(x[v], y, acc[v][j]);
+                for (c, xv) in col.iter_mut().zip(&x) {
+                    *c = _mm512_fnmadd_pd(*xv, y, *c);
                 }
             }
         }
-        for (v, row) in acc.iter().enumerate() {
-            for (j, x) in row.iter().enumerate() {
+        for (j, col) in acc.iter().enumerate() {
+            for (v, x) in col.iter().enumerate() {
                 _mm512_storeu_pd(cp.add(8 * v + j * pr.ldc), *x);
             }
         }
@@ -588,9 +589,10 @@ unsafe fn tile_avx2<const V: usize>(
         let cp = c.add(pr.c + i0 + j0 * pr.ldc);
         let ap = a.add(pr.a + i0);
         let bp = b.add(pr.b + j0 * pr.bj);
-        let mut acc = [[_mm256_setzero_pd(); 4]; V];
-        for (v, row) in acc.iter_mut().enumerate() {
-            for (j, x) in row.iter_mut().enumerate() {
+        // acc[j][v]: column j, rows 4 v..4 v + 4 of the tile.
+        let mut acc = [[_mm256_setzero_pd(); V]; 4];
+        for (j, col) in acc.iter_mut().enumerate() {
+            for (v, x) in col.iter_mut().enumerate() {
                 *x = _mm256_loadu_pd(cp.add(4 * v + j * pr.ldc));
             }
         }
@@ -598,15 +600,15 @@ unsafe fn tile_avx2<const V: usize>(
             let ak = ap.add(k * pr.lda);
             let x: [__m256d; V] = std::array::from_fn(|v| _mm256_loadu_pd(ak.add(4 * v)));
             let bk = bp.add(k * pr.bk);
-            for j in 0..4 {
+            for (j, col) in acc.iter_mut().enumerate() {
                 let y = _mm256_broadcast_sd(&*bk.add(j * pr.bj));
-                for v in 0..V {
-                    acc[v][j] = _mm256_fnmadd_pd(x[v], y, acc[v][j]);
+                for (c, xv) in col.iter_mut().zip(&x) {
+                    *c = _mm256_fnmadd_pd(*xv, y, *c);
                 }
             }
         }
-        for (v, row) in acc.iter().enumerate() {
-            for (j, x) in row.iter().enumerate() {
+        for (j, col) in acc.iter().enumerate() {
+            for (v, x) in col.iter().enumerate() {
                 _mm256_storeu_pd(cp.add(4 * v + j * pr.ldc), *x);
             }
         }
