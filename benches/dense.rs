@@ -1,8 +1,8 @@
 //! The library's dense kernels against faer's, at the sizes the fit uses:
 //! the store pass's Gram update of one block (512 rows of 100 materials,
 //! `Y += Z_b^T Z_b`, lower triangle; a 100-material fit does 8 544 of
-//! them), and the optimiser's refactorisation (Cholesky and inverse of a
-//! 100 x 100 kernel matrix; about 1 700 per fit). faer is here for scale
+//! them), and the optimiser's refactorisation (Cholesky and inverse of an
+//! N x N kernel matrix, N = 100 to 1000; about 1 700 per 100-material fit). faer is here for scale
 //! only: the library does not call it at run time (see the `dense`
 //! module).
 //!
@@ -12,7 +12,7 @@ use std::hint::black_box;
 
 use brdf_atlas_core::dense::Cholesky;
 use brdf_atlas_core::dense::gram::syrk_lower_add;
-use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use faer::linalg::matmul::triangular::{self as tri, BlockStructure};
 use faer::linalg::solvers::DenseSolveCore;
 use faer::{Accum, Mat, MatRef, Par, Side};
@@ -60,32 +60,40 @@ fn gram(c: &mut Criterion) {
     g.finish();
 }
 
-fn refactorise(c: &mut Criterion) {
-    let x = random(2 * N);
-    let k = Mat::from_fn(N, N, |i, j| {
+/// An RBF kernel matrix of `n` random points with the fit's noise, 1e-4:
+/// condition number up to about `n / 1e-4`.
+fn kernel(n: usize) -> Mat<f64> {
+    let x = random(2 * n);
+    Mat::from_fn(n, n, |i, j| {
         let d2 = (x[2 * i] - x[2 * j]).powi(2) + (x[2 * i + 1] - x[2 * j + 1]).powi(2);
         (-d2 / 2.0).exp() + if i == j { 1e-4 } else { 0.0 }
-    });
-    let kc: Vec<f64> = (0..N * N).map(|t| k[(t % N, t / N)]).collect();
-    let mut g = c.benchmark_group("cholesky and inverse 100 x 100");
-    g.bench_function("dense::Cholesky", |b| {
-        let mut l = Cholesky::with_size(N);
-        let (mut out, mut scratch) = (vec![0.0; N * N], Vec::new());
-        b.iter(|| {
-            l.factor_into(black_box(&kc)).unwrap();
-            l.inverse_into(&mut out, &mut scratch);
-            black_box(l.log_det())
+    })
+}
+
+fn refactorise(c: &mut Criterion) {
+    let mut g = c.benchmark_group("cholesky and inverse");
+    for n in [N, 200, 400, 1000] {
+        let k = kernel(n);
+        let kc: Vec<f64> = (0..n * n).map(|t| k[(t % n, t / n)]).collect();
+        g.bench_with_input(BenchmarkId::new("dense::Cholesky", n), &n, |b, &n| {
+            let mut l = Cholesky::with_size(n);
+            let (mut out, mut scratch) = (vec![0.0; n * n], Vec::new());
+            b.iter(|| {
+                l.factor_into(black_box(&kc)).unwrap();
+                l.inverse_into(&mut out, &mut scratch);
+                black_box(l.log_det())
+            });
         });
-    });
-    g.bench_function("faer llt", |b| {
-        b.iter(|| black_box(black_box(&k).llt(Side::Lower).unwrap().inverse()));
-    });
+        g.bench_with_input(BenchmarkId::new("faer llt", n), &n, |b, _| {
+            b.iter(|| black_box(black_box(&k).llt(Side::Lower).unwrap().inverse()));
+        });
+    }
     g.finish();
 }
 
 criterion_group! {
     name = benches;
-    config = Criterion::default().sample_size(30);
+    config = Criterion::default().sample_size(20);
     targets = gram, refactorise
 }
 criterion_main!(benches);
