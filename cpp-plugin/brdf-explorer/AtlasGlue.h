@@ -9,7 +9,9 @@ class QGridLayout;
 class QMenu;
 
 // Put the atlas panel (hidden until a model is open) in row `row` of the
-// parameter window's layout; a validated point becomes a BRDF in the list.
+// parameter window's layout; when it first shows, it and the BRDF list
+// below it go into a vertical splitter. A validated point becomes a BRDF
+// in the list.
 void brdfAtlasAttach( ParameterWindow* paramWnd, QGridLayout* layout, int row );
 
 // Add "Open brdf-atlas model..." to the File menu.

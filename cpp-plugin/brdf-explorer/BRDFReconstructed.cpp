@@ -2,6 +2,9 @@
 #include "BRDFReconstructed.h"
 
 #include <algorithm>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 BRDFReconstructed* BRDFReconstructed::create( const AtlasReconstruction& r, QString* error )
 {
@@ -15,26 +18,55 @@ BRDFReconstructed* BRDFReconstructed::create( const AtlasReconstruction& r, QStr
                          .arg( r.modelPath ).arg( r.dims.theta_h ).arg( r.dims.theta_d ).arg( r.dims.phi_d );
         return NULL;
     }
-    auto floats = std::make_shared<std::vector<float> >( r.table->begin(), r.table->end() );
-    return new BRDFReconstructed( r, std::move( floats ) );
+    BRDFReconstructed* b = new BRDFReconstructed( r );
+    // What BRDFMeasuredMERL::loadMERLData does with a file's data: the
+    // sample count and the floats that initGL uploads (and frees).
+    b->numBRDFSamples = int( r.table->size() / 3 );
+    b->brdfData = new float[ r.table->size() ];
+    std::copy( r.table->begin(), r.table->end(), b->brdfData );
+    return b;
 }
 
-BRDFReconstructed::BRDFReconstructed( const AtlasReconstruction& r,
-                                      std::shared_ptr<const std::vector<float> > s )
-    : recon( r ), samples( std::move( s ) )
+BRDFReconstructed::BRDFReconstructed( const AtlasReconstruction& r )
+    : recon( r )
 {
     recon.table.reset();
-    // What BRDFMeasuredMERL::loadMERLData does with a file's data: the name,
-    // the sample count and the float copy that initGL uploads (and frees).
     name = r.name.toStdString();
-    numBRDFSamples = int( samples->size() / 3 );
-    brdfData = new float[ samples->size() ];
-    std::copy( samples->begin(), samples->end(), brdfData );
+    tbo = 0;
+    tex = 0;
+}
+
+BRDFReconstructed::~BRDFReconstructed()
+{
+    // Never drawn: the floats were not uploaded (BRDFMeasuredMERL keeps them).
+    delete[] brdfData;
+    brdfData = NULL;
+}
+
+void BRDFReconstructed::initGL()
+{
+    const bool upload = !initializedGL;
+    BRDFMeasuredMERL::initGL();
+#if defined(__GLIBC__)
+    if( upload )
+        malloc_trim( 0 );
+#endif
 }
 
 BRDFBase* BRDFReconstructed::cloneBRDF( bool resetToDefaults )
 {
-    BRDFReconstructed* b = new BRDFReconstructed( recon, samples );
+    BRDFReconstructed* b = new BRDFReconstructed( recon );
+    b->numBRDFSamples = numBRDFSamples;
+    // Hand the table over: the OpenGL buffer once uploaded (the contexts of
+    // BRDF Explorer's views share it), the floats before. This BRDF keeps
+    // none; ~BRDFMeasuredMERL then deletes buffer 0, which OpenGL ignores.
+    b->brdfData = brdfData;
+    brdfData = NULL;
+    b->tbo = tbo;
+    b->tex = tex;
+    b->initializedGL = initializedGL;
+    tbo = 0;
+    tex = 0;
     if( !resetToDefaults )
         syncParametersIntoBRDF( b );
     return b;
