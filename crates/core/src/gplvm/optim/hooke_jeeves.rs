@@ -32,9 +32,8 @@ pub struct HookeJeeves {
     /// Step reduction factor when nothing improves (0.5 by default, as in the C++ implementation).
     pub reduction: f64,
     /// Refactorise `K` after this many accepted rank-one updates at most
-    /// (1024 by default; the interval adapts below it to the drift each
-    /// refactorisation measures, and from 400 materials on it is this cap
-    /// that sets it: 64 made that search factorise 1329 times, 1024 362).
+    /// (1024 by default: the interval adapts below it to the drift each
+    /// refactorisation measures, starting at 16).
     pub refresh_every: u64,
     /// Safety cap on exploratory sweeps.
     pub max_sweeps: u64,
