@@ -1,24 +1,27 @@
 //! The blocked kernels behind [`super::Cholesky`]: the factorisation
-//! `K = L L^T` and `M = L^-1`, on column-major buffers whose leading
-//! dimension `ld` is `n` rounded up to [`PAD`].
+//! `K = L L^T`, `W = L^-T` (`M = L^-1` by rows) and `K^-1 = W W^T`, on
+//! column-major buffers whose leading dimension `ld` is `n` rounded up to
+//! [`PAD`].
 //!
-//! Every entry is one chain of fused multiply-subtracts in ascending `k`,
+//! Every entry is one chain of fused multiply-adds in ascending `k`,
 //! whatever the blocking: `L[i][j]` is `K[i][j] - L[i][0] L[j][0] - ... -
 //! L[i][j-1] L[j][j-1]`, each step `fma(-a, b, acc)`, then a square root
 //! (the pivot) or a product with `1 / L[j][j]`; `M[i][j]` (`i > j`) is `0 -
 //! L[i][j] M[j][j] - ... - L[i][i-1] M[i-1][j]`, times `M[i][i] = 1 /
-//! L[i][i]`. Blocking only changes when each step runs, never the steps, so
-//! the AVX-512, AVX2 and portable paths (which vectorise across outputs,
-//! never across `k`) give the same bits as the obvious triple loop, and the
-//! first failing pivot is found at the same index.
+//! L[i][i]`; `K^-1[i][j]` (`i >= j`) is `M[i][i] M[i][j] + ... + M[n-1][i]
+//! M[n-1][j]`. Blocking only changes when each step runs, never the steps,
+//! so the AVX-512, AVX2 and portable paths (which vectorise across
+//! outputs, never across `k`) give the same bits as the obvious loops, and
+//! the first failing pivot is found at the same index.
 //!
-//! The work is `O(n^3)` products `C -= A B` of a block of [`NB`] columns
-//! (factorisation: the trailing lower triangle; inverse: the rows below a
-//! block of rows), done by register tiles that keep `C` in registers
-//! through the block's depth; the `O(n^2 PAD)` rest is the groups of
-//! [`PAD`] columns (rows) on the diagonal, in plain loops the compiler
-//! vectorises. Rows and columns past `n` (up to `ld`) are zeros that the
-//! tiles may read and write freely, so tiles need no masks.
+//! The work is `O(n^3)` products `C -= A B` over blocks of [`NB`] values
+//! of `k` (factorisation: the trailing lower triangle; `W`: the columns
+//! right of a block of columns; `W W^T`: the lower triangle), done by
+//! register tiles that keep `C` in registers through the block's depth;
+//! the `O(n^2 PAD)` rest is the groups of [`PAD`] columns on the diagonal,
+//! in plain loops the compiler vectorises. Rows and columns past `n` (up to
+//! `ld`) are zeros that the tiles may read and write freely, so tiles need
+//! no masks.
 
 /// Rows and columns are padded to a multiple of this: one AVX-512 register,
 /// two AVX2 registers.

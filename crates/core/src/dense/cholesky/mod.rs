@@ -3,11 +3,12 @@
 //!
 //! `K` is `N x N` with `N` the number of materials (100 to 1000),
 //! factorised and inverted hundreds of times per fit, so both are blocked
-//! ([`blocked`]): nearly all the arithmetic is register-tiled products
-//! `C -= A B` over blocks of 64 columns, as for a general matrix product. Sequential, and every entry of `L`
-//! and `L^-1` is one chain of fused multiply-adds in a fixed order, so the
-//! bits do not depend on the CPU path (AVX-512, AVX2, portable), the block
-//! size or the thread count; so does `K^-1 = L^-T L^-1`, by the same tiles.
+//! (the `blocked` submodule): nearly all the arithmetic is register-tiled
+//! products `C -= A B` over blocks of 64 columns, as in a general matrix
+//! product. Sequential, and every entry of `L`, `L^-1` and `K^-1 = L^-T
+//! L^-1` is one chain of fused multiply-adds in a fixed order, so the bits
+//! do not depend on the CPU path (AVX-512, AVX2, portable), the block size
+//! or the thread count.
 //!
 //! `L` is kept column-major with the leading dimension rounded up to a
 //! multiple of 8, the padding zero, so the tiles need no edge cases.
