@@ -3,8 +3,8 @@
 
 use std::ffi::c_char;
 
-use brdf_atlas_core::View;
 use brdf_atlas_core::NoProgress;
+use brdf_atlas_core::View;
 use brdf_merl::{MerlFile, Vec3};
 
 use crate::check;
