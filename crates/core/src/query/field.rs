@@ -23,12 +23,11 @@
 //! 4. evaluates that polynomial at every pixel: two small products a pixel
 //!    row (barycentric Lagrange weights of the grid, per axis).
 //!
-//! A patch still far from the tolerance after a refinement (more than
-//! [`CUT_RATIO`] times it) is cut in four and each quarter gets its own grids
-//! (down to [`MAX_DEPTH`] cuts; at that depth the finest grid is kept and its
-//! estimate reported, [`AlbedoField::estimate`]). The predictive variance
-//! `1 - k^T K^-1 k` gets the same treatment with an absolute tolerance
-//! ([`VARIANCE_TOLERANCE`]) and its own, cheap (`O(N^2)`), exact nodes.
+//! A patch more than [`CUT_RATIO`] tolerances off after a refinement is cut
+//! in four (down to [`MAX_DEPTH`] cuts, where the finest grid is kept and its
+//! estimate reported). The predictive variance `1 - k^T K^-1 k` gets the
+//! same with an absolute tolerance ([`VARIANCE_TOLERANCE`]) and its own,
+//! cheap (`O(N^2)`), exact nodes.
 //!
 //! **Cost.** A node reads every row of the dense rule (3.3 million rows of
 //! 100 materials for MERL dims): tens of milliseconds on two cores. Where
@@ -59,9 +58,10 @@ use faer::Mat;
 
 use crate::data::store::Rows;
 use crate::data::transform::InverseForm;
+use crate::dense::product::matmul;
 use crate::error::Result;
 use crate::model::Model;
-use crate::query::map::{View, variances};
+use crate::query::view::View;
 use crate::simd::dot;
 use crate::simd::fastexp;
 use crate::simd::fold::{GROUPS, ordered_blocks};
@@ -129,7 +129,7 @@ pub struct AlbedoField {
 }
 
 impl AlbedoField {
-    /// The rectangle the field covers.
+    /// The rectangle covered.
     pub fn domain(&self) -> View {
         self.domain
     }
@@ -355,13 +355,12 @@ impl Model {
     }
 
     /// The node budget of a `pixels`-pixel map's field: as many exact
-    /// albedos as cost about what integrating every pixel with
-    /// [`crate::DEFAULT_SAMPLES`] samples would (each node reads every row of
-    /// the dense rule, each pixel about three rows a sample), and at least
-    /// [`MIN_NODES`].
-    pub fn field_budget(&self, pixels: usize) -> usize {
+    /// albedos as cost what integrating every pixel with `samples` samples
+    /// would (a node reads every row of the dense rule, a pixel about three
+    /// rows a sample), and at least [`MIN_NODES`].
+    pub fn field_budget(&self, pixels: usize, samples: usize) -> usize {
         let rows = self.rule_rows().rows.len().max(1) as f64;
-        let per_pixel = 3.0 * crate::query::map::DEFAULT_SAMPLES as f64;
+        let per_pixel = 3.0 * samples as f64;
         ((pixels as f64 * per_pixel / rows) as usize).max(MIN_NODES)
     }
 
@@ -405,6 +404,21 @@ struct Cached {
     domain: View,
     budget: usize,
     field: Option<Arc<AlbedoField>>,
+}
+
+/// The predictive variance `1 - |L^-1 k|^2` (`K = L L^T`) of each column `k`
+/// of `kx`, clamped to `[0, 1]`; `kx` is overwritten by `L^-1 kx`.
+pub(crate) fn variances(inv: &[f64], kx: &[f64], n: usize, out: &mut [f32]) {
+    // w = K^-1 k(x) for the whole row in one product, then k . w per pixel.
+    let mut w = vec![0.0f64; kx.len()];
+    matmul(&mut w, inv, kx, n);
+    for ((o, k), w) in out
+        .iter_mut()
+        .zip(kx.chunks_exact(n))
+        .zip(w.chunks_exact(n))
+    {
+        *o = (1.0 - dot::dot(k, w)).clamp(0.0, 1.0) as f32;
+    }
 }
 
 /// A worker's buffers for [`Model::exact_albedos`]: a block of rows and
@@ -537,9 +551,8 @@ fn refine(
     Ok(Some(out))
 }
 
-/// A floor for the relative error's scale: a thousandth of the largest
-/// value at the grid's nodes, so that a node of nearly zero albedo does
-/// not demand a relative accuracy nobody sees.
+/// A floor for the relative error's scale, a thousandth of the largest node
+/// value: a nearly black node does not demand what nobody sees.
 fn node_scale(values: &[f64], channels: usize) -> f64 {
     if channels == 1 {
         return 1.0;
@@ -589,8 +602,7 @@ fn lagrange(grid: &[f64], x: f64) -> Vec<f64> {
     l
 }
 
-/// The patch holding `x` (the last one whose rectangle contains it, or the
-/// nearest when rounding puts `x` just outside every one).
+/// The patch holding `x`, or the nearest one (`x` just outside by rounding).
 fn find(patches: &[Patch], x: [f64; 2]) -> &Patch {
     let outside = |p: &Patch| {
         let r = &p.rect;

@@ -30,73 +30,14 @@ use crate::dense::product::matmul;
 use crate::error::{CoreError, Result};
 use crate::model::Model;
 use crate::progress::Progress;
-use crate::query::field::eval_row;
+use crate::query::field::{eval_row, variances};
+pub use crate::query::view::View;
 use crate::simd::dot;
 use crate::simd::fastexp;
 
 /// Quadrature samples per pixel when a map needs them (non-linear transforms)
 /// and the caller gives none; docs/performance.md says what it buys.
 pub const DEFAULT_SAMPLES: usize = 256;
-
-/// A window of the latent plane: `x` in `[x0, x1]`, `y` in `[y0, y1]`, y up.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct View {
-    /// Left edge.
-    pub x0: f64,
-    /// Right edge.
-    pub x1: f64,
-    /// Bottom edge.
-    pub y0: f64,
-    /// Top edge.
-    pub y1: f64,
-}
-
-impl Default for View {
-    /// The box `[-1, 1]^2` plus a 10% margin.
-    fn default() -> Self {
-        let h = crate::limits::DEFAULT_VIEW_HALF_WIDTH;
-        View {
-            x0: -h,
-            x1: h,
-            y0: -h,
-            y1: h,
-        }
-    }
-}
-
-impl View {
-    /// Check the window is finite and not empty.
-    pub fn check(&self) -> Result<()> {
-        let ok = [self.x0, self.x1, self.y0, self.y1]
-            .iter()
-            .all(|v| v.is_finite())
-            && self.x0 < self.x1
-            && self.y0 < self.y1;
-        if ok {
-            Ok(())
-        } else {
-            Err(CoreError::BadQuery(format!(
-                "view window {self:?} must be finite with x0 < x1 and y0 < y1"
-            )))
-        }
-    }
-
-    /// Latent point at the centre of pixel `(px, py)` of a `width x height` image (row 0 at the top).
-    pub fn pixel_to_latent(&self, px: f64, py: f64, width: usize, height: usize) -> [f64; 2] {
-        [
-            self.x0 + (px + 0.5) * (self.x1 - self.x0) / width as f64,
-            self.y1 - (py + 0.5) * (self.y1 - self.y0) / height as f64,
-        ]
-    }
-
-    /// Pixel coordinates (continuous, centres at `k + 0.5`) of a latent point.
-    pub fn latent_to_pixel(&self, x: [f64; 2], width: usize, height: usize) -> [f64; 2] {
-        [
-            (x[0] - self.x0) / (self.x1 - self.x0) * width as f64,
-            (self.y1 - x[1]) / (self.y1 - self.y0) * height as f64,
-        ]
-    }
-}
 
 /// How a map's albedo was computed.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -258,7 +199,9 @@ impl Model {
         progress.start("map", height as u64);
         let linear = self.file().transform.is_linear();
         let field = match samples {
-            None if !linear => self.albedo_field(view, self.field_budget(width * height))?,
+            None if !linear => {
+                self.albedo_field(view, self.field_budget(width * height, DEFAULT_SAMPLES))?
+            }
             _ => None,
         };
         let samples = match samples {
@@ -397,21 +340,6 @@ impl Model {
             variance,
             method,
         })
-    }
-}
-
-/// The predictive variance `1 - |L^-1 k|^2` (`K = L L^T`) of each column `k`
-/// of `kx`, clamped to `[0, 1]`; `kx` is overwritten by `L^-1 kx`.
-pub(crate) fn variances(inv: &[f64], kx: &[f64], n: usize, out: &mut [f32]) {
-    // w = K^-1 k(x) for the whole row in one product, then k . w per pixel.
-    let mut w = vec![0.0f64; kx.len()];
-    matmul(&mut w, inv, kx, n);
-    for ((o, k), w) in out
-        .iter_mut()
-        .zip(kx.chunks_exact(n))
-        .zip(w.chunks_exact(n))
-    {
-        *o = (1.0 - dot::dot(k, w)).clamp(0.0, 1.0) as f32;
     }
 }
 

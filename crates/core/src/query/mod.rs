@@ -17,6 +17,7 @@ pub mod render;
 pub mod sheet;
 mod sidecar;
 pub mod swatch;
+mod view;
 
 pub use contour::{Segment, contour_levels, contours, luminance};
 pub use locate::Located;
