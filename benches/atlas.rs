@@ -107,6 +107,38 @@ fn atlas(c: &mut Criterion) {
                 .expect("map")
         })
     });
+    // The default log map of 1024 x 1024 pixels: of the default view (a
+    // field there would cost more than the per-pixel rule, which it falls
+    // back to), and of a view a hundred times smaller, the albedo field,
+    // first as built from scratch (`build_field`: its exact nodes, the cost
+    // of the first map of a region) and then as a map that reuses the
+    // model's field (every later map of the region).
+    g.bench_function("log_default_1024", |b| {
+        b.iter(|| {
+            log.albedo_map(1024, 1024, View::default(), None, &NoProgress)
+                .expect("map")
+        })
+    });
+    let h = View::default().x1 / 100.0;
+    let small = View {
+        x0: 0.137 - h,
+        x1: 0.137 + h,
+        y0: -0.291 - h,
+        y1: -0.291 + h,
+    };
+    let budget = log.field_budget(1024 * 1024, brdf_atlas_core::DEFAULT_SAMPLES);
+    g.bench_function("log_field_build_1/100", |b| {
+        b.iter(|| {
+            log.build_field(brdf_atlas_core::field::domain_of(small), budget)
+                .expect("field")
+        })
+    });
+    g.bench_function("log_field_1024_1/100", |b| {
+        b.iter(|| {
+            log.albedo_map(1024, 1024, small, None, &NoProgress)
+                .expect("map")
+        })
+    });
     for samples in [64usize, 256, 1024] {
         g.bench_function(BenchmarkId::new("log_quadrature_256", samples), |b| {
             b.iter(|| {

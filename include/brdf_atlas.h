@@ -722,7 +722,10 @@ enum BrdfAtlasStatus brdf_atlas_model_weights(const struct BrdfAtlasModel *model
  * `view` NULL means the model's default window (`brdf_atlas_model_view`).
  * `samples` is the quadrature sample count per pixel; 0 means the library
  * default: exact (the per-material albedos blended) for a model in the raw
- * transform, 256 samples otherwise. At most `BRDF_ATLAS_MAX_SAMPLES`.
+ * transform; otherwise the albedo field (exact albedos at nodes, a
+ * polynomial between them, within 0.25% by its estimate; kept by the model,
+ * so later maps of the same region are fast) where it costs less than 256
+ * samples a pixel, which are used otherwise. At most `BRDF_ATLAS_MAX_SAMPLES`.
  *
  * Ownership: `model` and `view` are borrowed; `buf` is caller-owned, `len`
  * floats (at least width * height * 3), written on success only.

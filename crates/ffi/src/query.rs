@@ -3,8 +3,8 @@
 
 use std::ffi::c_char;
 
-use brdf_atlas_core::{DEFAULT_SAMPLES, View};
-use brdf_atlas_core::{Model, NoProgress};
+use brdf_atlas_core::NoProgress;
+use brdf_atlas_core::View;
 use brdf_merl::{MerlFile, Vec3};
 
 use crate::check;
@@ -240,17 +240,16 @@ pub unsafe extern "C" fn brdf_atlas_model_weights(
     })
 }
 
-/// The samples a map uses when the caller passes 0: none (the exact linear
-/// shortcut) for a linear transform, the library default otherwise.
-fn map_samples(model: &Model, samples: usize) -> Result<Option<usize>> {
+/// The samples a map uses: 0 means none (the library's default: the exact
+/// linear shortcut for a linear transform, the albedo field otherwise).
+fn map_samples(samples: usize) -> Result<Option<usize>> {
     if samples > BRDF_ATLAS_MAX_SAMPLES {
         return Err(Failure::invalid(format!(
             "{samples} quadrature samples, at most {BRDF_ATLAS_MAX_SAMPLES} are accepted"
         )));
     }
     Ok(match samples {
-        0 if model.file().transform.is_linear() => None,
-        0 => Some(DEFAULT_SAMPLES),
+        0 => None,
         s => Some(s),
     })
 }
@@ -264,7 +263,10 @@ fn map_samples(model: &Model, samples: usize) -> Result<Option<usize>> {
 /// `view` NULL means the model's default window (`brdf_atlas_model_view`).
 /// `samples` is the quadrature sample count per pixel; 0 means the library
 /// default: exact (the per-material albedos blended) for a model in the raw
-/// transform, 256 samples otherwise. At most `BRDF_ATLAS_MAX_SAMPLES`.
+/// transform; otherwise the albedo field (exact albedos at nodes, a
+/// polynomial between them, within 0.25% by its estimate; kept by the model,
+/// so later maps of the same region are fast) where it costs less than 256
+/// samples a pixel, which are used otherwise. At most `BRDF_ATLAS_MAX_SAMPLES`.
 ///
 /// Ownership: `model` and `view` are borrowed; `buf` is caller-owned, `len`
 /// floats (at least width * height * 3), written on success only.
@@ -303,7 +305,7 @@ pub unsafe extern "C" fn brdf_atlas_model_albedo_map(
         }
         let values = check::product(&[width, height, 3], "map size")?;
         let out = unsafe { check::buffer(buf, len, values, "buf") }?;
-        let samples = map_samples(m, samples)?;
+        let samples = map_samples(samples)?;
         let map = m.albedo_map(width, height, view, samples, &NoProgress)?;
         for (o, c) in out.chunks_exact_mut(3).zip(&map.rgb) {
             o.copy_from_slice(c);

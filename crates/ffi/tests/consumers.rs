@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;
 
-use brdf_atlas_core::{DEFAULT_SAMPLES, View};
+use brdf_atlas_core::View;
 use brdf_atlas_core::{FitOptions, fit_dir, store_path_for};
 use brdf_atlas_core::{GplvmParams, Model, NoProgress, Precision, TransformKind};
 use brdf_atlas_hostile::{merl_cases, model_cases};
@@ -181,11 +181,10 @@ fn build_fixture() -> Fixture {
         3,
         "three pairs have no value"
     );
-    // The map of the default window with the default samples (the model is
-    // in the log transform, so DEFAULT_SAMPLES), and one of another window.
-    let map = m
-        .albedo_map(16, 12, v, Some(DEFAULT_SAMPLES), &NoProgress)
-        .unwrap();
+    // The map of the default window with the default method (samples 0:
+    // the model is in the log transform, so the albedo field where it fits
+    // its budget), and one of another window.
+    let map = m.albedo_map(16, 12, v, None, &NoProgress).unwrap();
     let file = dir.join("map.f32");
     write_map(&file, &map.rgb);
     line(&mut e, "map 16 12 0", &[], Some(&file));

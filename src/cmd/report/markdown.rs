@@ -282,6 +282,7 @@ fn maps(w: &mut dyn Write, plan: &Plan, r: &Results) -> io::Result<()> {
             let (max, mean) = (pct(m.max_err), pct(m.mean_err));
             row(w, &[&samples, &m.bins, &max, &mean, &secs(m.time)])?;
         }
+        methods(w, r)?;
         writeln!(w, "\n![Map time vs size](map-size.png)\n")?;
         head(w, &["size", "method", "time"])?;
         for m in &r.sizes {
@@ -290,6 +291,77 @@ fn maps(w: &mut dyn Write, plan: &Plan, r: &Results) -> io::Result<()> {
         }
     }
     Ok(())
+}
+
+/// The default map method (the albedo field) against the per-pixel rule,
+/// and whether the map can be drawn in real time.
+fn methods(w: &mut dyn Write, r: &Results) -> io::Result<()> {
+    if r.methods.is_empty() {
+        return Ok(());
+    }
+    let n = r.methods_size;
+    writeln!(
+        w,
+        "\nThe default method against the per-pixel rule: error at {} random pixels of a \
+         {n}x{n} map of the default view and of a view a hundred times smaller, against \
+         the dense rule on the full reconstruction; time of the first map of the view and \
+         of the next (the model keeps a field it built).\n",
+        r.reference_pixels
+    )?;
+    head(
+        w,
+        &[
+            "view",
+            "method",
+            "max error",
+            "mean error",
+            "first map",
+            "next map",
+        ],
+    )?;
+    for m in &r.methods {
+        let (max, mean) = (pct(m.max_err), pct(m.mean_err));
+        row(
+            w,
+            &[
+                &m.view,
+                &m.method,
+                &max,
+                &mean,
+                &secs(m.first),
+                &secs(m.again),
+            ],
+        )?;
+    }
+    let find = |view: &str, field: bool| {
+        r.methods
+            .iter()
+            .find(|m| m.view == view && m.field == field)
+    };
+    let pixel = |view: &str| {
+        r.methods
+            .iter()
+            .find(|m| m.view == view && !m.field && !m.method.starts_with("default"))
+    };
+    write!(w, "\n**Can the map be drawn in real time?** ")?;
+    match (find("1/100", true), pixel("default")) {
+        (Some(f), Some(p)) => writeln!(
+            w,
+            "Zoomed in, yes once its field is built: a {n}x{n} map of a view a hundred times \
+             smaller takes {} the first time and {} after, within {} of the dense rule \
+             (the per-pixel rule: {}, {} off); the whole default view is not: its albedo has \
+             more detail than a field within budget resolves, so it is integrated per pixel \
+             in {}, up to {} off.",
+            secs(f.first),
+            secs(f.again),
+            pct(f.max_err),
+            secs(pixel("1/100").map_or(p.first, |q| q.first)),
+            pct(pixel("1/100").map_or(p.max_err, |q| q.max_err)),
+            secs(p.first),
+            pct(p.max_err)
+        ),
+        _ => writeln!(w, "not measured with a field here (see the table)."),
+    }
 }
 
 /// The f32 and the f64 store compared.

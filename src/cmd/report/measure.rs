@@ -81,6 +81,21 @@ pub struct SampleRow {
     pub time: Duration,
 }
 
+/// A map method at a view: the default (the albedo field where it fits its
+/// budget) or the per-pixel rule, its error and time.
+pub struct MethodRow {
+    /// "default" or "1/100".
+    pub view: &'static str,
+    pub method: String,
+    /// The method is the albedo field.
+    pub field: bool,
+    pub max_err: f64,
+    pub mean_err: f64,
+    /// The first map of the view (a field builds its nodes), and the next.
+    pub first: Duration,
+    pub again: Duration,
+}
+
 /// One map size.
 pub struct SizeRow {
     pub method: String,
@@ -122,6 +137,10 @@ pub struct Results {
     pub reference_time: Duration,
     pub reference_pixels: usize,
     pub sizes: Vec<SizeRow>,
+    /// The default map method against the per-pixel rule, by view.
+    pub methods: Vec<MethodRow>,
+    /// Side of the maps of `methods`.
+    pub methods_size: usize,
     /// The plausibility grid of each transform's q = 2 model, row by row
     /// from the top, under each rule.
     pub plausibility: Vec<PlausibilityRow>,
@@ -200,6 +219,8 @@ pub fn measure(
     if let Some((log_model, raw_model)) = &models {
         steps.say("albedo map: sample count vs error vs time")?;
         map_samples(log_model, plan, r)?;
+        steps.say("albedo map: the albedo field against the per-pixel rule")?;
+        map_methods(log_model, plan, r)?;
         steps.say("albedo map: size vs time")?;
         map_sizes(log_model, raw_model, plan, r)?;
         steps.say(&format!(
@@ -538,7 +559,7 @@ fn map_samples(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error>
         })?;
         let bins = match map.method {
             AlbedoMethod::Quadrature { bins, .. } => bins,
-            AlbedoMethod::Linear => 0,
+            AlbedoMethod::Linear | AlbedoMethod::Field { .. } => 0,
         };
         r.samples.push(SampleRow {
             samples: s,
@@ -548,6 +569,71 @@ fn map_samples(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error>
             time,
         });
     }
+    Ok(())
+}
+
+/// The default map (the albedo field where it fits its budget) and the
+/// per-pixel rule with the default samples, at random pixels of the default
+/// view and of one a hundred times smaller: error against dense references
+/// and time, first and again (a field is kept by the model).
+fn map_methods(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error> {
+    let size = plan.timed_size;
+    let h = View::default().x1 / 100.0;
+    let small = View {
+        x0: 0.137 - h,
+        x1: 0.137 + h,
+        y0: -0.291 - h,
+        y1: -0.291 + h,
+    };
+    let mut seed = 0x5eed_u64;
+    let mut next = || {
+        seed = seed
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        ((seed >> 33) as usize) % size
+    };
+    for (name, view) in [("default", View::default()), ("1/100", small)] {
+        let pixels: Vec<(usize, usize)> = (0..plan.grid * plan.grid)
+            .map(|_| (next(), next()))
+            .collect();
+        let reference = pixels
+            .iter()
+            .map(|&(px, py)| {
+                let x = view.pixel_to_latent(px as f64, py as f64, size, size);
+                reference_albedo(model, &x, model.albedo_rule())
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        for samples in [None, Some(DEFAULT_SAMPLES)] {
+            let t = Instant::now();
+            let map = model.albedo_map(size, size, view, samples, &NoProgress)?;
+            let first = t.elapsed();
+            let t = Instant::now();
+            model.albedo_map(size, size, view, samples, &NoProgress)?;
+            let again = t.elapsed();
+            let (max_err, mean_err) = map_error(&map, &pixels, &reference);
+            let (method, field) = match map.method {
+                AlbedoMethod::Field { nodes, .. } => (format!("field, {nodes} exact nodes"), true),
+                AlbedoMethod::Quadrature { samples, .. } => {
+                    (format!("per pixel, {samples} samples"), false)
+                }
+                AlbedoMethod::Linear => ("linear".into(), false),
+            };
+            let method = match samples {
+                None => format!("default ({method})"),
+                Some(_) => method,
+            };
+            r.methods.push(MethodRow {
+                view: name,
+                method,
+                field,
+                max_err,
+                mean_err,
+                first,
+                again,
+            });
+        }
+    }
+    r.methods_size = size;
     Ok(())
 }
 

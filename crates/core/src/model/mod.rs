@@ -8,8 +8,9 @@
 //! - [`Model`]: opened from disk ([`Model::open`]) or assembled in memory
 //!   ([`Model::new`]).
 
+use std::any::Any;
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
+use std::sync::{Arc, Mutex, OnceLock};
 
 use brdf_merl::albedo::Quadrature;
 use brdf_merl::{Dims, DirectionalRule};
@@ -264,6 +265,12 @@ pub(crate) struct MapBasis {
     pub(crate) linear: OnceLock<([Vec<f64>; 3], [f64; 3])>,
     /// The mean material's shape inside each quadrature box.
     pub(crate) shape: OnceLock<Vec<f64>>,
+    /// The dense rule's store rows and weights (`crate::query::field`'s
+    /// `RuleRows`; held by type so that the model does not name the query).
+    pub(crate) rule_rows: OnceLock<Box<dyn Any + Send + Sync>>,
+    /// The last albedo fields built (`crate::query::field`'s `AlbedoField`),
+    /// oldest first.
+    pub(crate) fields: Mutex<Vec<Arc<dyn Any + Send + Sync>>>,
 }
 
 #[cfg(test)]

@@ -1,15 +1,19 @@
 //! The albedo map of a 2-D latent space: every pixel is a latent point,
 //! coloured by the albedo of the material reconstructed there.
 //!
-//! Two ways to compute it, chosen by what the transform allows:
+//! Three ways to compute it, chosen by what the transform allows:
 //!
 //! - **Linear** (raw transform): albedo is linear in the BRDF, so with the
 //!   per-material albedos `A` (`N x 3`, integrated once from the store with
 //!   the dense quadrature rule) the map is `albedo(x) = albedo(mean) + k(x)^T K^-1 A`:
 //!   `N` exponentials and `3N` multiply-adds a pixel. This is the albedo of the
 //!   blend before clamping negative values.
-//! - **Quadrature** (log transform, or on request): the inverse transform is
-//!   not linear, so each pixel reconstructs exactly the bins of a quadrature
+//! - **Field** (log transform): the inverse transform is not linear, but
+//!   the albedo is a smooth function of the latent point: exact albedos at
+//!   the nodes of refined grids, and the polynomial through them at every
+//!   pixel, with an error estimate ([`crate::query::field`]). The predictive
+//!   variance is interpolated the same way.
+//! - **Quadrature** (on request, `samples`): each pixel reconstructs exactly the bins of a quadrature
 //!   rule with `samples` points and integrates them. The rows the rule needs
 //!   are gathered once and premultiplied by `K^-1` (`C = Z_q K^-1`), so a row of
 //!   pixels is one matrix product `C k(X_row)`. The sample count trades
@@ -26,6 +30,8 @@ use crate::dense::product::matmul;
 use crate::error::{CoreError, Result};
 use crate::model::Model;
 use crate::progress::Progress;
+use crate::query::field::{eval_row, variances};
+pub use crate::query::view::View;
 use crate::simd::dot;
 use crate::simd::fastexp;
 
@@ -33,72 +39,23 @@ use crate::simd::fastexp;
 /// and the caller gives none; docs/performance.md says what it buys.
 pub const DEFAULT_SAMPLES: usize = 256;
 
-/// A window of the latent plane: `x` in `[x0, x1]`, `y` in `[y0, y1]`, y up.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct View {
-    /// Left edge.
-    pub x0: f64,
-    /// Right edge.
-    pub x1: f64,
-    /// Bottom edge.
-    pub y0: f64,
-    /// Top edge.
-    pub y1: f64,
-}
-
-impl Default for View {
-    /// The box `[-1, 1]^2` plus a 10% margin.
-    fn default() -> Self {
-        let h = crate::limits::DEFAULT_VIEW_HALF_WIDTH;
-        View {
-            x0: -h,
-            x1: h,
-            y0: -h,
-            y1: h,
-        }
-    }
-}
-
-impl View {
-    /// Check the window is finite and not empty.
-    pub fn check(&self) -> Result<()> {
-        let ok = [self.x0, self.x1, self.y0, self.y1]
-            .iter()
-            .all(|v| v.is_finite())
-            && self.x0 < self.x1
-            && self.y0 < self.y1;
-        if ok {
-            Ok(())
-        } else {
-            Err(CoreError::BadQuery(format!(
-                "view window {self:?} must be finite with x0 < x1 and y0 < y1"
-            )))
-        }
-    }
-
-    /// Latent point at the centre of pixel `(px, py)` of a `width x height` image (row 0 at the top).
-    pub fn pixel_to_latent(&self, px: f64, py: f64, width: usize, height: usize) -> [f64; 2] {
-        [
-            self.x0 + (px + 0.5) * (self.x1 - self.x0) / width as f64,
-            self.y1 - (py + 0.5) * (self.y1 - self.y0) / height as f64,
-        ]
-    }
-
-    /// Pixel coordinates (continuous, centres at `k + 0.5`) of a latent point.
-    pub fn latent_to_pixel(&self, x: [f64; 2], width: usize, height: usize) -> [f64; 2] {
-        [
-            (x[0] - self.x0) / (self.x1 - self.x0) * width as f64,
-            (self.y1 - x[1]) / (self.y1 - self.y0) * height as f64,
-        ]
-    }
-}
-
 /// How a map's albedo was computed.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase", tag = "kind")]
 pub enum AlbedoMethod {
     /// Blended per-material albedos (exact for the raw transform).
     Linear,
+    /// A polynomial through exact albedos (the dense rule over the full
+    /// reconstruction) at the nodes of grids on patches of the view's
+    /// domain ([`crate::query::field`]).
+    Field {
+        /// Exact albedos the field holds.
+        nodes: usize,
+        /// Patches of the albedo polynomial.
+        patches: usize,
+        /// The refinement's error estimate, relative to a node's largest channel.
+        estimate: f64,
+    },
     /// Per-pixel quadrature over reconstructed bins.
     Quadrature {
         /// Requested sample count.
@@ -220,8 +177,9 @@ impl Model {
     }
 
     /// The albedo map of a `width x height` image of `view`. `samples`:
-    /// `None` uses the linear shortcut (raw transform only; an error
-    /// otherwise), `Some(s)` integrates each pixel with an `s`-point rule.
+    /// `None` uses the linear shortcut for a linear transform and the albedo
+    /// field ([`Model::albedo_field`]) for any other, `Some(s)` integrates
+    /// each pixel with an `s`-point rule.
     pub fn albedo_map(
         &self,
         width: usize,
@@ -239,14 +197,42 @@ impl Model {
         let inv = self.k_inverse();
         let kernel_row = |py: usize| kernel_row(&ex, &ey, n, py);
         progress.start("map", height as u64);
-        let method = match samples {
-            None => {
-                if !self.file().transform.is_linear() {
-                    return Err(CoreError::BadQuery(format!(
-                        "the {} transform is not linear: give a quadrature sample count",
-                        self.file().transform.name()
-                    )));
+        let linear = self.file().transform.is_linear();
+        let field = match samples {
+            None if !linear => {
+                self.albedo_field(view, self.field_budget(width * height, DEFAULT_SAMPLES))?
+            }
+            _ => None,
+        };
+        let samples = match samples {
+            None if !linear && field.is_none() => Some(DEFAULT_SAMPLES),
+            s => s,
+        };
+        let method = match (field, samples) {
+            (Some(field), _) => {
+                let xs: Vec<f64> = (0..width)
+                    .map(|px| view.pixel_to_latent(px as f64, 0.0, width, height)[0])
+                    .collect();
+                rgb.par_chunks_mut(width)
+                    .zip(variance.par_chunks_mut(width))
+                    .enumerate()
+                    .for_each(|(py, (row, var))| {
+                        let y = view.pixel_to_latent(0.0, py as f64, width, height)[1];
+                        eval_row(field.albedo_patches(), &xs, y, 3, |px, v| {
+                            row[px] = [0, 1, 2].map(|c| v[c].max(0.0) as f32);
+                        });
+                        eval_row(field.variance_patches(), &xs, y, 1, |px, v| {
+                            var[px] = v[0].clamp(0.0, 1.0) as f32;
+                        });
+                        progress.advance(1);
+                    });
+                AlbedoMethod::Field {
+                    nodes: field.nodes(),
+                    patches: field.patches(),
+                    estimate: field.estimate(),
                 }
+            }
+            (None, None) => {
                 let (cols, m) = self.linear_basis();
                 // albedo(x, y)_c = m_c + sum_i ex_i(x) (ey_i(y) B_ic): per row, the
                 // column factors meet one N-vector per channel.
@@ -269,7 +255,7 @@ impl Model {
                     });
                 AlbedoMethod::Linear
             }
-            Some(s) => {
+            (None, Some(s)) => {
                 let rule =
                     Quadrature::with_samples_shaped(self.albedo_rule(), s.max(1), self.shape());
                 let store = self.store();
@@ -354,21 +340,6 @@ impl Model {
             variance,
             method,
         })
-    }
-}
-
-/// The predictive variance `1 - |L^-1 k|^2` (`K = L L^T`) of each column `k`
-/// of `kx`, clamped to `[0, 1]`; `kx` is overwritten by `L^-1 kx`.
-fn variances(inv: &[f64], kx: &[f64], n: usize, out: &mut [f32]) {
-    // w = K^-1 k(x) for the whole row in one product, then k . w per pixel.
-    let mut w = vec![0.0f64; kx.len()];
-    matmul(&mut w, inv, kx, n);
-    for ((o, k), w) in out
-        .iter_mut()
-        .zip(kx.chunks_exact(n))
-        .zip(w.chunks_exact(n))
-    {
-        *o = (1.0 - dot::dot(k, w)).clamp(0.0, 1.0) as f32;
     }
 }
 

@@ -5,6 +5,7 @@
 pub(crate) mod budget;
 pub mod contour;
 mod decor;
+pub mod field;
 mod labels;
 pub mod locate;
 pub mod map;
@@ -16,6 +17,7 @@ pub mod render;
 pub mod sheet;
 mod sidecar;
 pub mod swatch;
+mod view;
 
 pub use contour::{Segment, contour_levels, contours, luminance};
 pub use locate::Located;

@@ -1,0 +1,700 @@
+//! The albedo field: exact albedos at a few latent points, a polynomial
+//! between them.
+//!
+//! The albedo at a latent point `x` is a smooth function of `x`: every
+//! reconstructed bin is `t_b(x) = mean_b + z_b . K^-1 k(x)`, a sum of
+//! Gaussians of the kernel's length scale, and the albedo is a weighted sum
+//! of the inverse transform of those bins. So instead of integrating every
+//! pixel with a cheap rule (whose error does not shrink with the pixel
+//! count), the map
+//!
+//! 1. picks a domain round the view (below);
+//! 2. computes the **exact** albedo — the dense rule
+//!    ([`Model::albedo_rule`]) over the full reconstruction — at the
+//!    nodes of a tensor Chebyshev–Lobatto grid on the domain, all nodes of a
+//!    grid in one pass over the store ([`Model::exact_albedos`]: one matrix
+//!    product a block of rows, so the store is read once however many nodes);
+//! 3. refines the grid (5, 9, 17, 33 points a side; each grid holds the
+//!    previous one) until the interpolant of the coarser grid, compared with
+//!    the exact values at the finer grid's new nodes, is off by at most
+//!    [`ALBEDO_TOLERANCE`] of the node's largest channel, and keeps the finer
+//!    grid's interpolant (Chebyshev interpolation of a smooth function
+//!    converges geometrically, so its error is well below the estimate);
+//! 4. evaluates that polynomial at every pixel: two small products a pixel
+//!    row (barycentric Lagrange weights of the grid, per axis).
+//!
+//! A patch more than [`CUT_RATIO`] tolerances off after a refinement is cut
+//! in four (down to [`MAX_DEPTH`] cuts, where the finest grid is kept and its
+//! estimate reported). The predictive variance `1 - k^T K^-1 k` gets the
+//! same with an absolute tolerance ([`VARIANCE_TOLERANCE`]) and its own,
+//! cheap (`O(N^2)`), exact nodes.
+//!
+//! **Cost.** A node reads every row of the dense rule (3.3 million rows of
+//! 100 materials for MERL dims): tens of milliseconds on two cores. Where
+//! the albedo has detail at a finer scale than the domain (under a log
+//! transform with the default kernel, blends of dissimilar neighbours clamp
+//! and swing; on the 100-material model a patch a quarter of the default
+//! view wide still misses the tolerance at 17 x 17 nodes) a field needs
+//! thousands of nodes. So a map gives its field a budget
+//! ([`Model::field_budget`]): as many nodes as cost what integrating every
+//! pixel with the default quadrature would; a field that would need more is
+//! abandoned and the map integrates every pixel. Zoomed-in views, whose
+//! albedo is nearly linear across them, get fields of a few dozen nodes.
+//!
+//! **Domains.** A view's domain is, per axis, the smallest interval of a
+//! fixed lattice that holds the view: intervals of length `L 2^-k` (`L` the
+//! default view's side) starting at multiples of half their length from the
+//! default view's corner. So the domain is at most four times the view, a
+//! zoomed view gets a small, nearly linear domain that needs few nodes, and
+//! the domain depends on the view only: the map is a function of (model,
+//! view, size), not of what was drawn before. The model keeps the last
+//! fields it built ([`FIELD_CACHE`]), so a viewer that pans and zooms inside
+//! one domain pays for its nodes once.
+
+use std::any::Any;
+use std::sync::Arc;
+
+use faer::Mat;
+
+use crate::data::store::Rows;
+use crate::data::transform::InverseForm;
+use crate::dense::product::matmul;
+use crate::error::Result;
+use crate::model::Model;
+use crate::query::view::View;
+use crate::simd::dot;
+use crate::simd::fastexp;
+use crate::simd::fold::{GROUPS, ordered_blocks};
+
+/// The largest error of the albedo interpolant allowed at a refinement's new
+/// nodes, relative to the node's largest channel: 0.25%.
+pub const ALBEDO_TOLERANCE: f64 = 2.5e-3;
+/// The largest absolute error of the variance interpolant allowed at a
+/// refinement's new nodes.
+pub const VARIANCE_TOLERANCE: f64 = 2e-3;
+/// Points a side of the successive grids of a patch (each holds the previous).
+const LEVELS: [usize; 3] = [5, 9, 17];
+/// The variance's exact nodes are cheap (`O(N^2)` each): it may go finer.
+const VARIANCE_LEVELS: [usize; 6] = [5, 9, 17, 33, 65, 129];
+/// The smallest node budget of a map's field ([`Model::field_budget`]):
+/// a 9 x 9 grid, enough for a view much smaller than the detail of its
+/// albedo.
+pub const MIN_NODES: usize = 81;
+/// How many times a domain may be cut in four.
+pub const MAX_DEPTH: usize = 4;
+/// A patch whose estimate is this many tolerances or more after a
+/// refinement is cut in four rather than refined further.
+pub const CUT_RATIO: f64 = 30.0;
+/// Fields a model keeps for later maps.
+pub const FIELD_CACHE: usize = 8;
+/// Rows of the store a step of the exact pass multiplies at once.
+const BLOCK: usize = 256;
+
+/// The rows of the store the dense rule reads, with what turns a row's
+/// reconstructed value into its share of the albedo.
+pub(crate) struct RuleRows {
+    /// Store rows (channel-major), ascending within each channel.
+    rows: Vec<usize>,
+    /// The channel of each row.
+    channel: Vec<u8>,
+    /// Quadrature weight times the inverse transform's scale.
+    weight: Vec<f64>,
+    /// `max(0, e^t - 1)` (log) rather than `max(0, t)` (raw).
+    exponential: bool,
+}
+
+/// A patch of the plane with a tensor grid of exact values, and the
+/// polynomial through them.
+#[derive(Debug, Clone)]
+pub(crate) struct Patch {
+    /// The patch's rectangle.
+    rect: View,
+    /// Grid abscissae, ascending.
+    xs: Vec<f64>,
+    /// Grid ordinates, ascending.
+    ys: Vec<f64>,
+    /// `channels` values per node, row `iy` after row `iy - 1`.
+    values: Vec<f64>,
+    /// The last refinement's error estimate.
+    estimate: f64,
+}
+
+/// The albedo and variance of a domain as piecewise tensor polynomials.
+#[derive(Debug, Clone)]
+pub struct AlbedoField {
+    domain: View,
+    albedo: Vec<Patch>,
+    variance: Vec<Patch>,
+    nodes: usize,
+}
+
+impl AlbedoField {
+    /// The rectangle covered.
+    pub fn domain(&self) -> View {
+        self.domain
+    }
+
+    /// The largest albedo error estimate of its patches (relative to a
+    /// node's largest channel): at most [`ALBEDO_TOLERANCE`] unless the
+    /// finest grid of the deepest cut did not get there.
+    pub fn estimate(&self) -> f64 {
+        self.albedo.iter().map(|p| p.estimate).fold(0.0, f64::max)
+    }
+
+    /// The largest variance error estimate of its patches (absolute).
+    pub fn variance_estimate(&self) -> f64 {
+        self.variance.iter().map(|p| p.estimate).fold(0.0, f64::max)
+    }
+
+    /// Exact albedos the field was built from.
+    pub fn nodes(&self) -> usize {
+        self.nodes
+    }
+
+    /// Patches of the albedo polynomial.
+    pub fn patches(&self) -> usize {
+        self.albedo.len()
+    }
+
+    /// Albedo (RGB, negative values clamped to 0) and variance at `x`
+    /// (inside the domain).
+    pub fn at(&self, x: [f64; 2]) -> ([f64; 3], f64) {
+        let a = eval_point(find(&self.albedo, x), x, 3);
+        let v = eval_point(find(&self.variance, x), x, 1);
+        (
+            [a[0].max(0.0), a[1].max(0.0), a[2].max(0.0)],
+            v[0].clamp(0.0, 1.0),
+        )
+    }
+}
+
+impl Model {
+    /// The rows of the dense rule, built once.
+    fn rule_rows(&self) -> &RuleRows {
+        let rows = self.map_basis().rule_rows.get_or_init(|| {
+            let rule = self.albedo_rule();
+            let store = self.store();
+            let bins = store.dims().bins();
+            let mut out = RuleRows {
+                rows: Vec::new(),
+                channel: Vec::new(),
+                weight: Vec::new(),
+                exponential: false,
+            };
+            for c in 0..3 {
+                for (&b, &w) in rule.bins().iter().zip(rule.weights()) {
+                    let row = c * bins + b as usize;
+                    if store.unmeasured()[row] != 0 {
+                        continue;
+                    }
+                    let scale = match self.transform().inverse_form(b as usize) {
+                        InverseForm::Linear(s) => s,
+                        InverseForm::Exp(s) => {
+                            out.exponential = true;
+                            s
+                        }
+                    };
+                    out.rows.push(row);
+                    out.channel.push(c as u8);
+                    out.weight.push(w * scale);
+                }
+            }
+            Box::new(out)
+        });
+        rows.downcast_ref()
+            .expect("the model's rule rows are RuleRows")
+    }
+
+    /// The albedo of the full reconstruction at each point, integrated
+    /// with the dense rule ([`Model::albedo_rule`]; negative reconstructed
+    /// values count as 0, unmeasured bins are left out). One pass over the
+    /// store for all points: each block of rows is one product with the
+    /// points' weights `K^-1 k(x)`. The sums are formed in a fixed order:
+    /// the answer does not depend on the thread count.
+    pub fn exact_albedos(&self, points: &[[f64; 2]]) -> Result<Vec<[f64; 3]>> {
+        self.store().verify_cheap()?;
+        let m = points.len();
+        if m == 0 {
+            return Ok(Vec::new());
+        }
+        for p in points {
+            self.kernel_and_weights_at(p)?;
+        }
+        let (latent, kernel) = (self.latent(), self.file().kernel);
+        let n = latent.nrows();
+        let kx = Mat::from_fn(n, m, |i, j| {
+            kernel.eval(&[latent[(i, 0)], latent[(i, 1)]], &points[j])
+        });
+        let w = self.llt_solve(&kx);
+        // W^T column-major (m x n), so a block's values are W^T Z_block.
+        let a: Vec<f64> = (0..n)
+            .flat_map(|t| (0..m).map(move |j| (t, j)))
+            .map(|(t, j)| w[(t, j)])
+            .collect();
+        let rule = self.rule_rows();
+        let store = self.store();
+        let mean = store.mean();
+        // f32 stores multiply in f32 (the weights rounded to f32: about 1e-8
+        // of the albedo, measured), f64 stores in f64; sums are f64.
+        let a32: Vec<f32> = a.iter().map(|&v| v as f32).collect();
+        let parts = ordered_blocks(
+            rule.rows.len(),
+            BLOCK,
+            GROUPS,
+            || vec![0.0f64; 3 * m],
+            |acc, range| {
+                SCRATCH.with_borrow_mut(|s| {
+                    let len = range.len();
+                    s.t64.resize(m * len, 0.0);
+                    let rows = &rule.rows[range.clone()];
+                    match store.z() {
+                        Rows::F32(z) => {
+                            s.z32.resize(n * len, 0.0);
+                            s.t32.resize(m * len, 0.0);
+                            for (k, &row) in rows.iter().enumerate() {
+                                s.z32[k * n..(k + 1) * n]
+                                    .copy_from_slice(&z[row * n..(row + 1) * n]);
+                            }
+                            product(&mut s.t32, &a32, &s.z32, (m, n, len));
+                            for (t, v) in s.t64.iter_mut().zip(&s.t32) {
+                                *t = f64::from(*v);
+                            }
+                        }
+                        Rows::F64(z) => {
+                            s.z64.resize(n * len, 0.0);
+                            for (k, &row) in rows.iter().enumerate() {
+                                s.z64[k * n..(k + 1) * n]
+                                    .copy_from_slice(&z[row * n..(row + 1) * n]);
+                            }
+                            product(&mut s.t64, &a, &s.z64, (m, n, len));
+                        }
+                    }
+                    for (k, r) in range.enumerate() {
+                        let (mu, wt) = (mean[rule.rows[r]], rule.weight[r]);
+                        let c = rule.channel[r] as usize;
+                        let acc = &mut acc[c * m..(c + 1) * m];
+                        let t = &s.t64[k * m..(k + 1) * m];
+                        if rule.exponential {
+                            for (o, t) in acc.iter_mut().zip(t) {
+                                *o += wt * (fastexp::exp(mu + t) - 1.0).max(0.0);
+                            }
+                        } else {
+                            for (o, t) in acc.iter_mut().zip(t) {
+                                *o += wt * (mu + t).max(0.0);
+                            }
+                        }
+                    }
+                })
+            },
+        );
+        let mut out = vec![[0.0f64; 3]; m];
+        for acc in parts {
+            for (j, o) in out.iter_mut().enumerate() {
+                for (c, oc) in o.iter_mut().enumerate() {
+                    *oc += acc[c * m + j];
+                }
+            }
+        }
+        self.verify()?;
+        Ok(out)
+    }
+
+    /// The exact predictive variance `1 - k^T K^-1 k` at each point.
+    fn exact_variances(&self, points: &[[f64; 2]]) -> Vec<f64> {
+        let (latent, kernel) = (self.latent(), self.file().kernel);
+        let n = latent.nrows();
+        let inv = self.k_inverse();
+        let mut out = vec![0.0f32; points.len()];
+        for (chunk, o) in points.chunks(256).zip(out.chunks_mut(256)) {
+            let kx: Vec<f64> = chunk
+                .iter()
+                .flat_map(|p| {
+                    (0..n).map(move |i| kernel.eval(&[latent[(i, 0)], latent[(i, 1)]], p))
+                })
+                .collect();
+            variances(&inv, &kx, n, o);
+        }
+        // Computed in f64 and rounded to f32 only by `variances`' output.
+        out.into_iter().map(f64::from).collect()
+    }
+
+    /// The field of `view`'s domain ([`domain_of`]), from the model's cache
+    /// or built and kept; `None` when its albedo needs more than `budget`
+    /// exact nodes (the map then integrates every pixel instead). A domain
+    /// that failed is tried again only with a larger budget.
+    pub fn albedo_field(&self, view: View, budget: usize) -> Result<Option<Arc<AlbedoField>>> {
+        view.check()?;
+        let domain = domain_of(view);
+        let cache = &self.map_basis().fields;
+        let cached = |c: &[Arc<dyn Any + Send + Sync>]| {
+            c.iter()
+                .filter_map(|f| f.clone().downcast::<Cached>().ok())
+                .find(|f| f.domain == domain && (f.field.is_some() || f.budget >= budget))
+        };
+        if let Some(f) = cached(&lock(cache)) {
+            return Ok(f.field.clone());
+        }
+        let field = self.build_field(domain, budget)?.map(Arc::new);
+        let mut cache = lock(cache);
+        if cached(&cache).is_none() {
+            cache.retain(|f| {
+                f.clone()
+                    .downcast::<Cached>()
+                    .is_ok_and(|f| f.domain != domain)
+            });
+            if cache.len() >= FIELD_CACHE {
+                cache.remove(0);
+            }
+            cache.push(Arc::new(Cached {
+                domain,
+                budget,
+                field: field.clone(),
+            }));
+        }
+        Ok(field)
+    }
+
+    /// The node budget of a `pixels`-pixel map's field: as many exact
+    /// albedos as cost what integrating every pixel with `samples` samples
+    /// would (a node reads every row of the dense rule, a pixel about three
+    /// rows a sample), and at least [`MIN_NODES`].
+    pub fn field_budget(&self, pixels: usize, samples: usize) -> usize {
+        let rows = self.rule_rows().rows.len().max(1) as f64;
+        let per_pixel = 3.0 * samples as f64;
+        ((pixels as f64 * per_pixel / rows) as usize).max(MIN_NODES)
+    }
+
+    /// Build the field of `domain` (no cache), or `None` if its albedo would
+    /// need more than `budget` exact nodes.
+    pub fn build_field(&self, domain: View, budget: usize) -> Result<Option<AlbedoField>> {
+        let mut nodes = 0;
+        let albedo = refine(domain, 3, &LEVELS, ALBEDO_TOLERANCE, 0, &mut |pts| {
+            nodes += pts.len();
+            if nodes > budget {
+                return Ok(None);
+            }
+            Ok(Some(
+                self.exact_albedos(pts)?.into_iter().flatten().collect(),
+            ))
+        })?;
+        let Some(albedo) = albedo else {
+            return Ok(None);
+        };
+        let variance = refine(
+            domain,
+            1,
+            &VARIANCE_LEVELS,
+            VARIANCE_TOLERANCE,
+            0,
+            &mut |pts| Ok(Some(self.exact_variances(pts))),
+        )?
+        .expect("the variance has no budget");
+        Ok(Some(AlbedoField {
+            domain,
+            albedo,
+            variance,
+            nodes,
+        }))
+    }
+}
+
+/// A domain's field, or that it has none within `budget` nodes, as the
+/// model keeps it.
+struct Cached {
+    domain: View,
+    budget: usize,
+    field: Option<Arc<AlbedoField>>,
+}
+
+/// The predictive variance `1 - |L^-1 k|^2` (`K = L L^T`) of each column `k`
+/// of `kx`, clamped to `[0, 1]`; `kx` is overwritten by `L^-1 kx`.
+pub(crate) fn variances(inv: &[f64], kx: &[f64], n: usize, out: &mut [f32]) {
+    // w = K^-1 k(x) for the whole row in one product, then k . w per pixel.
+    let mut w = vec![0.0f64; kx.len()];
+    matmul(&mut w, inv, kx, n);
+    for ((o, k), w) in out
+        .iter_mut()
+        .zip(kx.chunks_exact(n))
+        .zip(w.chunks_exact(n))
+    {
+        *o = (1.0 - dot::dot(k, w)).clamp(0.0, 1.0) as f32;
+    }
+}
+
+/// A worker's buffers for [`Model::exact_albedos`]: a block of rows and
+/// its values at the nodes (kept between calls, so a pass allocates nothing).
+#[derive(Default)]
+struct Scratch {
+    z32: Vec<f32>,
+    z64: Vec<f64>,
+    t32: Vec<f32>,
+    t64: Vec<f64>,
+}
+
+thread_local! {
+    static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch::default());
+}
+
+/// `t = a z` with `a` `m x n` and `z` `n x len`, column-major, on this
+/// thread (the pass is parallel over blocks already).
+fn product<T: faer::traits::ComplexField + Copy + From<u8>>(
+    t: &mut [T],
+    a: &[T],
+    z: &[T],
+    (m, n, len): (usize, usize, usize),
+) {
+    faer::linalg::matmul::matmul(
+        faer::MatMut::from_column_major_slice_mut(t, m, len),
+        faer::Accum::Replace,
+        faer::MatRef::from_column_major_slice(a, m, n),
+        faer::MatRef::from_column_major_slice(z, n, len),
+        T::from(1u8),
+        faer::Par::Seq,
+    );
+}
+
+fn lock<T>(m: &std::sync::Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Exact values at a set of points, `channels` a point.
+type Exact<'a> = dyn FnMut(&[[f64; 2]]) -> Result<Option<Vec<f64>>> + 'a;
+
+/// Patches covering `rect` whose interpolants meet `tol` (or are the finest
+/// grid at the deepest cut); `None` when `exact` refuses (its budget is spent).
+fn refine(
+    rect: View,
+    channels: usize,
+    levels: &[usize],
+    tol: f64,
+    depth: usize,
+    exact: &mut Exact<'_>,
+) -> Result<Option<Vec<Patch>>> {
+    let mut patch = Patch {
+        rect,
+        xs: lobatto(rect.x0, rect.x1, levels[0]),
+        ys: lobatto(rect.y0, rect.y1, levels[0]),
+        values: Vec::new(),
+        estimate: f64::INFINITY,
+    };
+    let Some(values) = exact(&grid_points(&patch.xs, &patch.ys))? else {
+        return Ok(None);
+    };
+    patch.values = values;
+    for &size in &levels[1..] {
+        let xs = lobatto(rect.x0, rect.x1, size);
+        let ys = lobatto(rect.y0, rect.y1, size);
+        // The new nodes: odd index on either axis.
+        let fresh: Vec<(usize, usize)> = (0..ys.len())
+            .flat_map(|iy| (0..xs.len()).map(move |ix| (ix, iy)))
+            .filter(|(ix, iy)| ix % 2 == 1 || iy % 2 == 1)
+            .collect();
+        let pts: Vec<[f64; 2]> = fresh.iter().map(|&(ix, iy)| [xs[ix], ys[iy]]).collect();
+        let Some(got) = exact(&pts)? else {
+            return Ok(None);
+        };
+        let scale = node_scale(&patch.values, channels);
+        let mut estimate = 0.0f64;
+        for (p, v) in pts.iter().zip(got.chunks_exact(channels)) {
+            let guess = eval_point(&patch, *p, channels);
+            let s = if channels == 1 {
+                1.0
+            } else {
+                v.iter().fold(scale, |a, b| a.max(b.abs()))
+            };
+            for (g, v) in guess.iter().zip(v) {
+                estimate = estimate.max((g - v).abs() / s);
+            }
+        }
+        let mut values = vec![0.0f64; xs.len() * ys.len() * channels];
+        for iy in (0..ys.len()).step_by(2) {
+            for ix in (0..xs.len()).step_by(2) {
+                let (o, i) = (iy * xs.len() + ix, (iy / 2) * patch.xs.len() + ix / 2);
+                values[o * channels..(o + 1) * channels]
+                    .copy_from_slice(&patch.values[i * channels..(i + 1) * channels]);
+            }
+        }
+        for (&(ix, iy), v) in fresh.iter().zip(got.chunks_exact(channels)) {
+            let o = iy * xs.len() + ix;
+            values[o * channels..(o + 1) * channels].copy_from_slice(v);
+        }
+        patch = Patch {
+            rect,
+            xs,
+            ys,
+            values,
+            estimate,
+        };
+        if estimate <= tol {
+            return Ok(Some(vec![patch]));
+        }
+        // Far off after a doubling: the patch is too large for its function
+        // at these degrees; quarters converge faster than finer grids.
+        if depth < MAX_DEPTH && estimate > CUT_RATIO * tol {
+            break;
+        }
+    }
+    if depth >= MAX_DEPTH || patch.estimate <= tol {
+        return Ok(Some(vec![patch]));
+    }
+    let (xm, ym) = (0.5 * (rect.x0 + rect.x1), 0.5 * (rect.y0 + rect.y1));
+    let mut out = Vec::new();
+    for (x0, x1) in [(rect.x0, xm), (xm, rect.x1)] {
+        for (y0, y1) in [(rect.y0, ym), (ym, rect.y1)] {
+            let quarter = View { x0, x1, y0, y1 };
+            match refine(quarter, channels, levels, tol, depth + 1, exact)? {
+                Some(p) => out.extend(p),
+                None => return Ok(None),
+            }
+        }
+    }
+    Ok(Some(out))
+}
+
+/// A floor for the relative error's scale, a thousandth of the largest node
+/// value: a nearly black node does not demand what nobody sees.
+fn node_scale(values: &[f64], channels: usize) -> f64 {
+    if channels == 1 {
+        return 1.0;
+    }
+    1e-3 * values.iter().fold(1e-12f64, |a, v| a.max(v.abs()))
+}
+
+/// The points of a tensor grid, row `iy` after row `iy - 1`.
+fn grid_points(xs: &[f64], ys: &[f64]) -> Vec<[f64; 2]> {
+    ys.iter()
+        .flat_map(|&y| xs.iter().map(move |&x| [x, y]))
+        .collect()
+}
+
+/// `n` Chebyshev–Lobatto points of `[a, b]`, ascending, ends included.
+fn lobatto(a: f64, b: f64, n: usize) -> Vec<f64> {
+    let (c, h) = (0.5 * (a + b), 0.5 * (b - a));
+    (0..n)
+        .map(|j| match j {
+            0 => a,
+            j if j == n - 1 => b,
+            j => c - h * (std::f64::consts::PI * j as f64 / (n - 1) as f64).cos(),
+        })
+        .collect()
+}
+
+/// The Lagrange basis of the Lobatto grid `grid` at `x` (barycentric form,
+/// weights `(-1)^j`, halved at the ends): `sum_j l_j f_j` is the interpolant.
+fn lagrange(grid: &[f64], x: f64) -> Vec<f64> {
+    let n = grid.len();
+    if let Some(j) = grid.iter().position(|&g| g == x) {
+        let mut l = vec![0.0; n];
+        l[j] = 1.0;
+        return l;
+    }
+    let mut l: Vec<f64> = grid
+        .iter()
+        .enumerate()
+        .map(|(j, &g)| {
+            let w = if j == 0 || j == n - 1 { 0.5 } else { 1.0 };
+            let w = if j % 2 == 0 { w } else { -w };
+            w / (x - g)
+        })
+        .collect();
+    let s: f64 = l.iter().sum();
+    l.iter_mut().for_each(|v| *v /= s);
+    l
+}
+
+/// The patch holding `x`, or the nearest one (`x` just outside by rounding).
+fn find(patches: &[Patch], x: [f64; 2]) -> &Patch {
+    let outside = |p: &Patch| {
+        let r = &p.rect;
+        (r.x0 - x[0]).max(x[0] - r.x1).max(0.0) + (r.y0 - x[1]).max(x[1] - r.y1).max(0.0)
+    };
+    patches
+        .iter()
+        .min_by(|a, b| outside(a).total_cmp(&outside(b)))
+        .expect("a field has patches")
+}
+
+/// The patch's interpolant at `x`, `channels` values.
+fn eval_point(p: &Patch, x: [f64; 2], channels: usize) -> Vec<f64> {
+    let (lx, ly) = (lagrange(&p.xs, x[0]), lagrange(&p.ys, x[1]));
+    let mut out = vec![0.0; channels];
+    for (iy, wy) in ly.iter().enumerate() {
+        for (ix, wx) in lx.iter().enumerate() {
+            let o = (iy * p.xs.len() + ix) * channels;
+            for (c, oc) in out.iter_mut().enumerate() {
+                *oc += wy * wx * p.values[o + c];
+            }
+        }
+    }
+    out
+}
+
+/// Evaluate patches at the pixels of one image row: `xs` the pixels'
+/// abscissae, `y` the row's ordinate; `write(px, values)` per pixel.
+pub(crate) fn eval_row(
+    patches: &[Patch],
+    xs: &[f64],
+    y: f64,
+    channels: usize,
+    mut write: impl FnMut(usize, &[f64]),
+) {
+    let mut px = 0;
+    // Pixels of a row fall in patches in runs (patches are rectangles).
+    while px < xs.len() {
+        let p = find(patches, [xs[px], y]);
+        let ly = lagrange(&p.ys, y);
+        // g_c(x_j) = sum_i l_i(y) f_c(x_j, y_i): the row's polynomial in x.
+        let nx = p.xs.len();
+        let mut g = vec![0.0f64; channels * nx];
+        for (iy, wy) in ly.iter().enumerate() {
+            for ix in 0..nx {
+                let o = (iy * nx + ix) * channels;
+                for c in 0..channels {
+                    g[c * nx + ix] += wy * p.values[o + c];
+                }
+            }
+        }
+        let mut out = vec![0.0f64; channels];
+        while px < xs.len() && std::ptr::eq(find(patches, [xs[px], y]), p) {
+            let lx = lagrange(&p.xs, xs[px]);
+            for (c, o) in out.iter_mut().enumerate() {
+                *o = dot::dot(&lx, &g[c * nx..(c + 1) * nx]);
+            }
+            write(px, &out);
+            px += 1;
+        }
+    }
+}
+
+impl AlbedoField {
+    /// The albedo patches, for [`eval_row`].
+    pub(crate) fn albedo_patches(&self) -> &[Patch] {
+        &self.albedo
+    }
+
+    /// The variance patches, for [`eval_row`].
+    pub(crate) fn variance_patches(&self) -> &[Patch] {
+        &self.variance
+    }
+}
+
+/// The domain of `view`: per axis, the smallest interval of the lattice of
+/// the default view's side over powers of two, offset by half lengths, that
+/// holds the view's interval (the view itself past 60 halvings or doublings).
+pub fn domain_of(view: View) -> View {
+    let d = View::default();
+    let axis = |a: f64, len: f64, v0: f64, v1: f64| -> (f64, f64) {
+        for k in (-60..=60).rev() {
+            let s = len * 2f64.powi(-k);
+            let i = ((v0 - a) / (0.5 * s)).floor();
+            let lo = a + i * 0.5 * s;
+            if lo <= v0 && lo + s >= v1 {
+                return (lo, lo + s);
+            }
+        }
+        (v0, v1)
+    };
+    let (x0, x1) = axis(d.x0, d.x1 - d.x0, view.x0, view.x1);
+    let (y0, y1) = axis(d.y0, d.y1 - d.y0, view.y0, view.y1);
+    View { x0, x1, y0, y1 }
+}

@@ -1,0 +1,66 @@
+//! A window of the latent plane and its pixel <-> latent mapping, shared
+//! by the map and the albedo field.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{CoreError, Result};
+
+/// A window of the latent plane: `x` in `[x0, x1]`, `y` in `[y0, y1]`, y up.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct View {
+    /// Left edge.
+    pub x0: f64,
+    /// Right edge.
+    pub x1: f64,
+    /// Bottom edge.
+    pub y0: f64,
+    /// Top edge.
+    pub y1: f64,
+}
+
+impl Default for View {
+    /// The box `[-1, 1]^2` plus a 10% margin.
+    fn default() -> Self {
+        let h = crate::limits::DEFAULT_VIEW_HALF_WIDTH;
+        View {
+            x0: -h,
+            x1: h,
+            y0: -h,
+            y1: h,
+        }
+    }
+}
+
+impl View {
+    /// Check the window is finite and not empty.
+    pub fn check(&self) -> Result<()> {
+        let ok = [self.x0, self.x1, self.y0, self.y1]
+            .iter()
+            .all(|v| v.is_finite())
+            && self.x0 < self.x1
+            && self.y0 < self.y1;
+        if ok {
+            Ok(())
+        } else {
+            Err(CoreError::BadQuery(format!(
+                "view window {self:?} must be finite with x0 < x1 and y0 < y1"
+            )))
+        }
+    }
+
+    /// Latent point at the centre of pixel `(px, py)` of a `width x height` image (row 0 at the top).
+    pub fn pixel_to_latent(&self, px: f64, py: f64, width: usize, height: usize) -> [f64; 2] {
+        [
+            self.x0 + (px + 0.5) * (self.x1 - self.x0) / width as f64,
+            self.y1 - (py + 0.5) * (self.y1 - self.y0) / height as f64,
+        ]
+    }
+
+    /// Pixel coordinates (continuous, centres at `k + 0.5`) of a latent point.
+    pub fn latent_to_pixel(&self, x: [f64; 2], width: usize, height: usize) -> [f64; 2] {
+        [
+            (x[0] - self.x0) / (self.x1 - self.x0) * width as f64,
+            (self.y1 - x[1]) / (self.y1 - self.y0) * height as f64,
+        ]
+    }
+}

@@ -1,0 +1,237 @@
+//! The albedo field against an independent reference: the map's albedo at
+//! random pixels of views a hundred times smaller than the default (and of
+//! any view whose field fits its budget) against the dense rule applied to
+//! the full reconstruction there (`Model::at` -> every bin ->
+//! `Quadrature::integrate`), within 1% of the pixel's largest channel; its
+//! variance against the exact variance map, within 0.01; the per-pixel rule
+//! where the field would cost more; and the same bits whatever the thread
+//! count.
+
+use std::path::{Path, PathBuf};
+
+use brdf_atlas_core::measure::reference_albedo;
+use brdf_atlas_core::{
+    AlbedoMap, AlbedoMethod, FitOptions, GplvmParams, Model, NoProgress, Precision, TransformKind,
+    View, fit_dir,
+};
+use brdf_merl::{Dims, synth};
+
+const DIMS: Dims = Dims {
+    theta_h: 8,
+    theta_d: 8,
+    phi_d: 16,
+};
+
+fn fit(dir: &Path, count: usize, transform: TransformKind) -> PathBuf {
+    let data = dir.join(format!("data-{count}"));
+    synth::write_dir(&data, count, DIMS, 5).unwrap();
+    let model = dir.join(format!("m-{count}-{}.atlas", transform.name()));
+    let options = FitOptions {
+        params: GplvmParams::new(2).check().unwrap(),
+        transform,
+        precision: Precision::F32,
+    };
+    fit_dir(&data, &model, &options, &NoProgress).unwrap();
+    model
+}
+
+/// `count` pixels of a `side x side` map from a seeded generator.
+fn random_pixels(side: usize, count: usize, seed: u64) -> Vec<(usize, usize)> {
+    let mut s = seed;
+    let mut next = || {
+        s = s
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        ((s >> 33) as usize) % side
+    };
+    (0..count).map(|_| (next(), next())).collect()
+}
+
+/// Largest error of `map` at `pixels` against the dense reference, relative
+/// to the reference's largest channel.
+fn worst_error(model: &Model, map: &AlbedoMap, pixels: &[(usize, usize)]) -> f64 {
+    let rule = model.albedo_rule();
+    let mut worst = 0.0f64;
+    for &(px, py) in pixels {
+        let x = map
+            .view
+            .pixel_to_latent(px as f64, py as f64, map.width, map.height);
+        let want = reference_albedo(model, &x, rule).unwrap();
+        let got = map.rgb[py * map.width + px];
+        let scale = want.iter().fold(1e-9f64, |a, v| a.max(v.abs()));
+        for c in 0..3 {
+            worst = worst.max((f64::from(got[c]) - want[c]).abs() / scale);
+        }
+    }
+    worst
+}
+
+/// Largest difference of the map's variance from the exact variance map.
+fn variance_error(model: &Model, map: &AlbedoMap) -> f64 {
+    let exact = model.variance_map(map.width, map.height, map.view).unwrap();
+    exact
+        .iter()
+        .zip(&map.variance)
+        .map(|(a, b)| f64::from((a - b).abs()))
+        .fold(0.0, f64::max)
+}
+
+/// A view `1 / zoom` the default's side, centred at `c`.
+fn zoomed(c: [f64; 2], zoom: f64) -> View {
+    let h = View::default().x1 / zoom;
+    View {
+        x0: c[0] - h,
+        x1: c[0] + h,
+        y0: c[1] - h,
+        y1: c[1] + h,
+    }
+}
+
+#[test]
+fn field_map_is_within_one_percent_of_the_dense_rule_at_every_zoom() {
+    let tmp = tempfile::tempdir().unwrap();
+    let model = Model::open(fit(tmp.path(), 12, TransformKind::Log)).unwrap();
+    let side = 96;
+    let latent = model.latent();
+    let views = [
+        View::default(),
+        // A hundred times smaller, round a material and between materials.
+        zoomed([latent[(3, 0)], latent[(3, 1)]], 100.0),
+        zoomed([0.137, -0.291], 100.0),
+        // Partly outside the default view: a domain of its own.
+        View {
+            x0: 0.6,
+            x1: 1.9,
+            y0: -1.5,
+            y1: -0.2,
+        },
+    ];
+    let mut fields = 0;
+    for (k, view) in views.into_iter().enumerate() {
+        let map = model
+            .albedo_map(side, side, view, None, &NoProgress)
+            .unwrap();
+        let worst = worst_error(&model, &map, &random_pixels(side, 40, 7 + k as u64));
+        match map.method {
+            AlbedoMethod::Field {
+                nodes, estimate, ..
+            } => {
+                fields += 1;
+                assert!(nodes >= 25, "{nodes}");
+                assert!(
+                    worst <= 0.01,
+                    "view {view:?}: worst error {worst:.3e} (estimate {estimate:.2e})"
+                );
+                let verr = variance_error(&model, &map);
+                assert!(verr <= 0.01, "view {view:?}: variance off by {verr:.3e}");
+            }
+            // A domain whose field would cost more than integrating every
+            // pixel falls back to the per-pixel rule.
+            AlbedoMethod::Quadrature { samples, .. } => {
+                assert_eq!(samples, brdf_atlas_core::DEFAULT_SAMPLES);
+                // Its error is several percent (docs/performance.md); only sane here.
+                assert!(worst <= 0.25, "view {view:?}: worst error {worst:.3e}");
+                assert_eq!(variance_error(&model, &map), 0.0);
+            }
+            AlbedoMethod::Linear => panic!("a log map is not linear"),
+        }
+        // The small views always get a field.
+        if k == 1 || k == 2 {
+            assert!(matches!(map.method, AlbedoMethod::Field { .. }), "{view:?}");
+        }
+    }
+    assert!(fields >= 2);
+}
+
+#[test]
+fn a_fresh_model_and_one_that_cached_the_field_draw_the_same_map() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = fit(tmp.path(), 8, TransformKind::Log);
+    let view = zoomed([0.3, 0.2], 100.0);
+    let draw = |threads: usize| {
+        let model = Model::open(&path).unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            // The default view first (cached), then the zoomed one.
+            model
+                .albedo_map(32, 32, View::default(), None, &NoProgress)
+                .unwrap();
+            let a = model.albedo_map(40, 40, view, None, &NoProgress).unwrap();
+            let b = model.albedo_map(40, 40, view, None, &NoProgress).unwrap();
+            assert_eq!(a.rgb, b.rgb);
+            a
+        })
+    };
+    let (one, two) = (draw(1), draw(3));
+    assert_eq!(one.rgb, two.rgb, "thread count changed the map");
+    assert_eq!(one.variance, two.variance);
+}
+
+#[test]
+fn exact_albedos_are_the_dense_rule_on_the_full_reconstruction() {
+    let tmp = tempfile::tempdir().unwrap();
+    let model = Model::open(fit(tmp.path(), 6, TransformKind::Log)).unwrap();
+    let points = [[0.0, 0.0], [0.9, -0.4], [-1.05, 1.1], [2.0, 0.5]];
+    let got = model.exact_albedos(&points).unwrap();
+    for (x, g) in points.iter().zip(&got) {
+        let want = reference_albedo(&model, x, model.albedo_rule()).unwrap();
+        for c in 0..3 {
+            assert!(
+                (g[c] - want[c]).abs() <= 1e-6 * want[c].abs().max(1e-3),
+                "{x:?}: {g:?} against {want:?}"
+            );
+        }
+    }
+    assert!(model.exact_albedos(&[[f64::NAN, 0.0]]).is_err());
+}
+
+#[test]
+fn a_raw_model_keeps_its_exact_linear_map() {
+    let tmp = tempfile::tempdir().unwrap();
+    let model = Model::open(fit(tmp.path(), 6, TransformKind::Raw)).unwrap();
+    let map = model
+        .albedo_map(24, 24, View::default(), None, &NoProgress)
+        .unwrap();
+    assert_eq!(map.method, AlbedoMethod::Linear);
+}
+
+#[test]
+fn a_views_domain_holds_it_and_is_at_most_four_times_its_size() {
+    use brdf_atlas_core::field::domain_of;
+    let mut s = 99u64;
+    let mut next = || {
+        s = s
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    };
+    assert_eq!(domain_of(View::default()), View::default());
+    for _ in 0..2000 {
+        let (c, d) = (4.0 * next() - 2.0, 4.0 * next() - 2.0);
+        let w = 10f64.powf(-6.0 * next());
+        let view = View {
+            x0: c,
+            x1: c + w,
+            y0: d,
+            y1: d + w * (0.5 + next()),
+        };
+        let dom = domain_of(view);
+        assert!(dom.x0 <= view.x0 && dom.x1 >= view.x1, "{view:?} {dom:?}");
+        assert!(dom.y0 <= view.y0 && dom.y1 >= view.y1, "{view:?} {dom:?}");
+        assert!(dom.x1 - dom.x0 <= 4.0 * (view.x1 - view.x0) * (1.0 + 1e-9));
+        assert!(dom.y1 - dom.y0 <= 4.0 * (view.y1 - view.y0) * (1.0 + 1e-9));
+        // Panning within the domain keeps it.
+        let e = 1e-3 * w;
+        let moved = View {
+            x0: view.x0 + e,
+            x1: view.x1 + e,
+            ..view
+        };
+        if moved.x1 <= dom.x1 && domain_of(moved).x1 - domain_of(moved).x0 == dom.x1 - dom.x0 {
+            assert!(domain_of(moved).x0 <= moved.x0);
+        }
+    }
+}
