@@ -151,3 +151,21 @@ fn fit_and_queries_stay_under_512_mb_of_private_memory() {
     let now = vm_data(&std::fs::read_to_string("/proc/self/status").unwrap()).unwrap();
     assert!(now <= LIMIT, "leave-one-out: VmData {now} bytes");
 }
+
+/// A fit of 1000 materials (tiny tables, one Hooke-Jeeves step size) stays
+/// under the bound too: the store pass's per-group `N x N` partial sums
+/// (64 of 8 MB each at this size, with each group's buffers kept to the
+/// end) once took it to 800 MB.
+#[test]
+fn a_fit_of_a_thousand_materials_stays_under_512_mb() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("merl");
+    synth(&data, 1000, "2,2,4", 3);
+    let model = tmp.path().join("model.atlas");
+    let (summary, peak) = run_sampled(
+        tmp.path(),
+        &[&"fit", &data, &"-o", &model, &"--min-step", &"0.25"],
+    );
+    assert!(summary.contains("fitted 1000 materials"), "{summary}");
+    assert!(peak <= LIMIT, "fit of 1000: VmData reached {peak} bytes");
+}

@@ -27,6 +27,20 @@ pub fn ordered_blocks<S: Send>(
     init: impl Fn() -> S + Sync,
     step: impl Fn(&mut S, Range<usize>) + Sync,
 ) -> Vec<S> {
+    ordered_blocks_then(rows, block, groups, init, step, |s| s)
+}
+
+/// [`ordered_blocks`], each group's state turned into `finish(state)` as
+/// soon as the group is done: what the caller folds is all that stays,
+/// the group's buffers are freed then.
+pub fn ordered_blocks_then<S, T: Send>(
+    rows: usize,
+    block: usize,
+    groups: usize,
+    init: impl Fn() -> S + Sync,
+    step: impl Fn(&mut S, Range<usize>) + Sync,
+    finish: impl Fn(S) -> T + Sync,
+) -> Vec<T> {
     let block = block.max(1);
     let blocks = rows.div_ceil(block);
     let groups = groups.min(blocks).max(1);
@@ -37,7 +51,7 @@ pub fn ordered_blocks<S: Send>(
             for b in (g * blocks / groups)..((g + 1) * blocks / groups) {
                 step(&mut state, b * block..((b + 1) * block).min(rows));
             }
-            state
+            finish(state)
         })
         .collect()
 }

@@ -14,7 +14,7 @@ use crate::data::transform::TransformKind;
 use crate::dense::gram::syrk_lower_add;
 use crate::error::{CoreError, Result};
 use crate::progress::Progress;
-use crate::simd::fold::{GROUPS, ordered_blocks};
+use crate::simd::fold::{GROUPS, ordered_blocks_then};
 
 use super::{BLOCK_ROWS, Layout, Precision, Store};
 use crate::data::Dataset;
@@ -23,7 +23,7 @@ use crate::data::Dataset;
 /// [`BLOCK_ROWS`] and accumulate `sum_j z_j z_j^T`. `fill` writes a block
 /// material by material: `buf[i * len + r]` is material `i` in row `r0 + r`,
 /// with `len = buf.len() / n` rows in the block. Blocks are grouped into
-/// [`GROUPS`] fixed ranges summed in order ([`ordered_blocks`]), so the result does not depend on
+/// [`GROUPS`] fixed ranges summed in order ([`ordered_blocks_then`]), so the result does not depend on
 /// how rayon schedules them; each block's products are summed in a fixed
 /// order by [`syrk_lower_add`], on every CPU.
 pub(super) fn gram_fold<S: Send>(
@@ -33,10 +33,10 @@ pub(super) fn gram_fold<S: Send>(
     scratch: impl Fn() -> S + Sync,
     fill: impl Fn(&mut S, usize, &mut [f64]) + Sync,
 ) -> Mat<f64> {
-    let partials = ordered_blocks(
+    let partials = ordered_blocks_then(
         rows,
         BLOCK_ROWS,
-        GROUPS,
+        gram_groups(n),
         || (vec![0.0f64; n * n], vec![0.0f64; BLOCK_ROWS * n], scratch()),
         |(acc, buf, scratch), range| {
             let len = range.len();
@@ -46,9 +46,10 @@ pub(super) fn gram_fold<S: Send>(
             syrk_lower_add(buf, len, acc);
             progress.advance(len as u64);
         },
+        |(acc, _, _)| acc,
     );
     let mut y = vec![0.0f64; n * n];
-    for (p, _, _) in &partials {
+    for p in &partials {
         y.iter_mut().zip(p).for_each(|(a, b)| *a += b);
     }
     // Only the lower triangle was accumulated (half the flops): mirror it.
@@ -57,6 +58,17 @@ pub(super) fn gram_fold<S: Send>(
         n,
         |i, j| if i >= j { y[j * n + i] } else { y[i * n + j] },
     )
+}
+
+/// Bytes of the Gram pass's partial sums kept until the ordered fold.
+const PARTIALS_BUDGET: usize = 64 << 20;
+
+/// Groups of the Gram pass for `n` materials: [`GROUPS`] while their `n x n`
+/// partial sums fit [`PARTIALS_BUDGET`] (up to 362 materials), fewer above
+/// (8 at 1000, never under 4), so the pass's memory stays bounded. It
+/// depends on `n` only, never on the thread count.
+fn gram_groups(n: usize) -> usize {
+    (PARTIALS_BUDGET / (n * n * 8).max(1)).clamp(4, GROUPS)
 }
 
 /// Rows of a block centred and transposed together: one cache line of f64
