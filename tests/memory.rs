@@ -105,7 +105,8 @@ fn fit_and_queries_stay_under_512_mb_of_private_memory() {
     let new = tmp.path().join("new.binary");
     let files = binaries(&data);
     let lbfgs = tmp.path().join("lbfgs.atlas");
-    let runs: [Vec<&dyn AsRef<std::ffi::OsStr>>; 5] = [
+    let field = tmp.path().join("field.png");
+    let runs: [Vec<&dyn AsRef<std::ffi::OsStr>>; 6] = [
         vec![
             &"map",
             &model,
@@ -116,6 +117,7 @@ fn fit_and_queries_stay_under_512_mb_of_private_memory() {
             &"--samples",
             &"16",
         ],
+        vec![&"map", &model, &"-o", &field, &"--size", &"48"],
         vec![&"reconstruct", &model, &"--at", &"0.1,-0.2", &"-o", &new],
         vec![&"fit", &data, &"-o", &lbfgs, &"--optimizer", &"lbfgs"],
         vec![&"locate", &model, &files[0], &files[1]],

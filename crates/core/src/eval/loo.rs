@@ -40,7 +40,7 @@ use crate::data::transform::{InverseForm, Transform, TransformKind};
 use crate::error::{ParamError, Result};
 use crate::progress::Progress;
 use crate::simd::fastlog::log1p;
-use crate::simd::fold::{GROUPS, ordered_blocks};
+use crate::simd::fold::{GROUPS, ordered_blocks_then};
 
 /// Rows of the store per block of the LOO pass.
 const BLOCK: usize = 1024;
@@ -157,7 +157,9 @@ pub fn evaluate(
         out: Vec<f64>,
         row: RowScratch,
     }
-    let partials = ordered_blocks(
+    // Each group's buffers (`out` is `BLOCK x` predictors `x N` values)
+    // are freed as it ends; only its sums wait for the ordered fold.
+    let partials = ordered_blocks_then(
         rows,
         BLOCK,
         GROUPS,
@@ -191,16 +193,17 @@ pub fn evaluate(
             g.scored += score_block(&scoring, r0, z, &g.out[..len * mn], &mut g.sums, &mut g.row);
             progress.advance(len as u64);
         },
+        |g| (g.sums, g.scored),
     );
     progress.finish();
     let (mut et, mut ef, mut el, mut scored) = (vec![0.0; mn], vec![0.0; mn], vec![0.0; mn], 0);
-    for g in partials {
+    for (sums, group_scored) in partials {
         et.iter_mut()
-            .zip(g.sums.transformed)
+            .zip(sums.transformed)
             .for_each(|(a, b)| *a += b);
-        ef.iter_mut().zip(g.sums.raw).for_each(|(a, b)| *a += b);
-        el.iter_mut().zip(g.sums.log).for_each(|(a, b)| *a += b);
-        scored += g.scored;
+        ef.iter_mut().zip(sums.raw).for_each(|(a, b)| *a += b);
+        el.iter_mut().zip(sums.log).for_each(|(a, b)| *a += b);
+        scored += group_scored;
     }
     let errors = (0..count)
         .map(|m| Errors {

@@ -18,7 +18,7 @@ use crate::error::{ParamError, Result};
 use crate::gplvm::kernel::{Kernel, rows_of};
 use crate::progress::Progress;
 use crate::query::budget::{Budget, convex_weights, counted};
-use crate::simd::fold::{GROUPS, ordered_blocks};
+use crate::simd::fold::{GROUPS, ordered_blocks_then};
 
 /// Rows of the store per block of the pass.
 const BLOCK: usize = 1024;
@@ -77,7 +77,7 @@ pub fn plausible_predictors(
     let cos = crate::data::transform::cosine_products(dims);
     let mean = store.mean();
     progress.start("plausible steps", store.rows() as u64);
-    let parts = ordered_blocks(
+    let parts = ordered_blocks_then(
         store.rows(),
         BLOCK,
         GROUPS,
@@ -111,10 +111,11 @@ pub fn plausible_predictors(
             }
             progress.advance(len as u64);
         },
+        |(budget, _, _)| budget,
     );
     progress.finish();
     let mut budget = Budget::new(n);
-    for (b, _, _) in &parts {
+    for b in &parts {
         budget.merge(b);
     }
     Ok(budgets
