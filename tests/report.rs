@@ -6,7 +6,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{brdf_atlas, texts};
+use common::{brdf_atlas, fit, synth, texts};
 
 fn leftovers(parent: &Path) -> Vec<String> {
     std::fs::read_dir(parent)
@@ -175,20 +175,13 @@ fn report_writes_every_file_and_fails_atomically() {
 
 /// `--growth` fits synthetic databases of each size with both optimisers;
 /// its Hooke-Jeeves cost is the one `fit` reaches on the same materials
-/// written by `synth` (a separate path: files, the store pass, the CLI).
+/// (`synth`'s generator, the same seed) written as files (a separate path:
+/// files, the store pass, the CLI).
 #[test]
 fn growth_section_matches_fit_on_the_same_materials() {
     let tmp = tempfile::tempdir().unwrap();
     let merl = tmp.path().join("merl");
-    let made = brdf_atlas([
-        "synth".as_ref(),
-        "--count".as_ref(),
-        "4".as_ref(),
-        "--dims".as_ref(),
-        "8,8,16".as_ref(),
-        merl.as_os_str(),
-    ]);
-    assert!(made.status.success(), "{:?}", texts(&made));
+    synth(&merl, 4, "8,8,16", 1);
     let rep = tmp.path().join("rep");
     let run = brdf_atlas([
         "report".as_ref(),
@@ -223,26 +216,11 @@ fn growth_section_matches_fit_on_the_same_materials() {
             ("30", "lbfgs")
         ]
     );
-    // The 30-material Hooke-Jeeves fit again, through `synth` and `fit`.
+    // The 30-material Hooke-Jeeves fit again, from the same materials
+    // (seed 1) written as files, through `fit`.
     let same = tmp.path().join("same");
-    let made = brdf_atlas([
-        "synth".as_ref(),
-        "--count".as_ref(),
-        "30".as_ref(),
-        "--dims".as_ref(),
-        "16,16,32".as_ref(),
-        same.as_os_str(),
-    ]);
-    assert!(made.status.success(), "{:?}", texts(&made));
-    let model = tmp.path().join("same.atlas");
-    let fit = brdf_atlas([
-        "fit".as_ref(),
-        same.as_os_str(),
-        "-o".as_ref(),
-        model.as_os_str(),
-    ]);
-    let (stdout, stderr) = texts(&fit);
-    assert!(fit.status.success(), "{stdout}\n{stderr}");
+    synth(&same, 30, "16,16,32", 1);
+    let stdout = fit(&same, &tmp.path().join("same.atlas"), &[]);
     // `cost   A -> B (...)`: B, printed with 7 significant digits or more.
     let line = stdout
         .lines()
