@@ -99,7 +99,7 @@ pub fn symv2(a: &[f64], x: [&[f64]; 2], out: [&mut [f64]; 2]) {
     let a = &a[..n * n];
     let [o0, o1] = out;
     let (o0, o1) = (&mut o0[..n], &mut o1[..n]);
-    symv2_columns(a, x, 0, [o0, o1]);
+    symv2_all(a, x, [o0, o1]);
 }
 
 /// [`quadform`] of two vectors in one pass over `A`, the same bits as two
@@ -110,7 +110,7 @@ pub fn quadform2(a: &[f64], x: [&[f64]; 2], scratch: [&mut [f64]; 2]) -> [f64; 2
     let a = &a[..n * n];
     let [s0, s1] = scratch;
     let (s0, s1) = (&mut s0[..n], &mut s1[..n]);
-    quadform2_columns(a, x, 0, [s0, s1]);
+    quadform2_all(a, x, [s0, s1]);
     [dot_fused(x[0], s0), dot_fused(x[1], s1)]
 }
 
@@ -132,24 +132,24 @@ fn dot_fused(x: &[f64], y: &[f64]) -> f64 {
 /// sixteen registers.
 const PAIR_COLUMNS: usize = 4;
 
-/// `out[v][k] = A[.., c0 + k] . x[v]`.
-fn symv2_columns(a: &[f64], x: [&[f64]; 2], c0: usize, out: [&mut [f64]; 2]) {
+/// `out[v][c] = A[.., c] . x[v]`.
+fn symv2_all(a: &[f64], x: [&[f64]; 2], out: [&mut [f64]; 2]) {
     #[cfg(target_arch = "x86_64")]
     if super::has_avx2_fma() {
         // SAFETY: the CPU has AVX2 and FMA (checked just above).
-        return unsafe { symv2_columns_avx2(a, x, c0, out) };
+        return unsafe { symv2_all_avx2(a, x, out) };
     }
     let n = x[0].len();
     for (v, out) in out.into_iter().enumerate() {
         for (k, o) in out.iter_mut().enumerate() {
-            *o = dot4(x[v], &a[(c0 + k) * n..]);
+            *o = dot4(x[v], &a[k * n..]);
         }
     }
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn symv2_columns_avx2(a: &[f64], x: [&[f64]; 2], c0: usize, out: [&mut [f64]; 2]) {
+fn symv2_all_avx2(a: &[f64], x: [&[f64]; 2], out: [&mut [f64]; 2]) {
     const C: usize = PAIR_COLUMNS;
     let n = x[0].len();
     let [o0, o1] = out;
@@ -157,30 +157,28 @@ fn symv2_columns_avx2(a: &[f64], x: [&[f64]; 2], c0: usize, out: [&mut [f64]; 2]
     let full = count / C * C;
     for k0 in (0..full).step_by(C) {
         let mut r = [[0.0; 2]; C];
-        dots_avx2(a, (n, c0 + k0, 0), x, &mut r);
+        dots_avx2(a, (n, k0, 0), x, &mut r);
         for (k, r) in r.into_iter().enumerate() {
             (o0[k0 + k], o1[k0 + k]) = (r[0], r[1]);
         }
     }
     for k in full..count {
         let mut r = [[0.0; 2]];
-        dots_avx2(a, (n, c0 + k, 0), x, &mut r);
+        dots_avx2(a, (n, k, 0), x, &mut r);
         (o0[k], o1[k]) = (r[0][0], r[0][1]);
     }
 }
 
-/// [`quadform`]'s `s_c` for the columns `c0 + k` (`c0` a multiple of
-/// [`GROUP`]) of both vectors.
-fn quadform2_columns(a: &[f64], x: [&[f64]; 2], c0: usize, s: [&mut [f64]; 2]) {
+/// [`quadform`]'s `s_c` for every column, of both vectors.
+fn quadform2_all(a: &[f64], x: [&[f64]; 2], s: [&mut [f64]; 2]) {
     #[cfg(target_arch = "x86_64")]
     if super::has_avx2_fma() {
         // SAFETY: the CPU has AVX2 and FMA (checked just above).
-        return unsafe { quadform2_columns_avx2(a, x, c0, s) };
+        return unsafe { quadform2_all_avx2(a, x, s) };
     }
     let n = x[0].len();
     for (v, s) in s.into_iter().enumerate() {
-        for (k, sc) in s.iter_mut().enumerate() {
-            let c = c0 + k;
+        for (c, sc) in s.iter_mut().enumerate() {
             let g0 = c / GROUP * GROUP;
             let g = (g0 + GROUP).min(n);
             let d = dot4(&x[v][g0..g], &a[c * n + g0..c * n + g]);
@@ -192,14 +190,13 @@ fn quadform2_columns(a: &[f64], x: [&[f64]; 2], c0: usize, s: [&mut [f64]; 2]) {
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn quadform2_columns_avx2(a: &[f64], x: [&[f64]; 2], c0: usize, s: [&mut [f64]; 2]) {
+fn quadform2_all_avx2(a: &[f64], x: [&[f64]; 2], s: [&mut [f64]; 2]) {
     const C: usize = PAIR_COLUMNS;
     let n = x[0].len();
     let [s0, s1] = s;
-    let end = c0 + s0.len();
     // Whole groups of eight columns, as [`quadform`] takes them.
     let full = n / GROUP * GROUP;
-    for g0 in (c0..end.min(full)).step_by(GROUP) {
+    for g0 in (0..full).step_by(GROUP) {
         let g = g0 + GROUP;
         // The group's columns four at a time, against the same rows as
         // [`quadform`]'s eight.
@@ -208,16 +205,16 @@ fn quadform2_columns_avx2(a: &[f64], x: [&[f64]; 2], c0: usize, s: [&mut [f64]; 
             dots_avx2(a, (n, h, g0), [&x[0][g0..g], &x[1][g0..g]], &mut d);
             dots_avx2(a, (n, h, g), [&x[0][g..], &x[1][g..]], &mut b);
             for (k, (d, b)) in d.into_iter().zip(b).enumerate() {
-                s0[h - c0 + k] = d[0] + 2.0 * b[0];
-                s1[h - c0 + k] = d[1] + 2.0 * b[1];
+                s0[h + k] = d[0] + 2.0 * b[0];
+                s1[h + k] = d[1] + 2.0 * b[1];
             }
         }
     }
-    for c in full.max(c0)..end {
+    for c in full..n {
         let mut d = [[0.0; 2]];
         dots_avx2(a, (n, c, full), [&x[0][full..], &x[1][full..]], &mut d);
-        s0[c - c0] = d[0][0] + 2.0 * 0.0;
-        s1[c - c0] = d[0][1] + 2.0 * 0.0;
+        s0[c] = d[0][0] + 2.0 * 0.0;
+        s1[c] = d[0][1] + 2.0 * 0.0;
     }
 }
 
