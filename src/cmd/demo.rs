@@ -181,6 +181,7 @@ fn fit_model(state: &mut State) -> Result<(), Error> {
         store_precision: PrecisionArg::F32,
         length_scale: fit::DEFAULT_LENGTH_SCALE,
         noise: fit::DEFAULT_NOISE,
+        learn_kernel: false,
         min_step: fit::DEFAULT_MIN_STEP,
     };
     let fitted = fit::fit(&args)?;

@@ -57,6 +57,11 @@ pub struct Args {
     /// Noise added to the kernel diagonal.
     #[arg(long, default_value_t = DEFAULT_NOISE, allow_negative_numbers = true)]
     pub noise: f64,
+    /// Learn the length scale and noise by maximum likelihood together with
+    /// the latent points (needs `--optimizer lbfgs`); `--length-scale` and
+    /// `--noise` are then where the search starts.
+    #[arg(long)]
+    pub learn_kernel: bool,
     /// Hooke-Jeeves stops when its step falls below this.
     #[arg(long, default_value_t = DEFAULT_MIN_STEP, allow_negative_numbers = true)]
     pub min_step: f64,
@@ -89,6 +94,7 @@ pub fn fit(args: &Args) -> Result<Fitted, Error> {
         .length_scale(args.length_scale)
         .noise(args.noise)
         .optimizer(args.optimizer.into())
+        .learn_kernel(args.learn_kernel)
         .min_step(args.min_step)
         .check()?;
     let n = count_binaries(&args.dir).unwrap_or(0);
@@ -167,10 +173,16 @@ pub fn write_summary(out: &mut impl Write, args: &Args, fitted: &Fitted) -> io::
     )?;
     writeln!(
         out,
-        "  model      q = {}, length scale {}, noise {:e}, transform {}, optimiser {}",
+        "  model      q = {}, {}, transform {}, optimiser {}",
         o.latent.ncols(),
-        k.length_scale,
-        k.noise,
+        if r.fit.learned_kernel {
+            format!(
+                "length scale {:.4}, noise {:.3e} (learned)",
+                k.length_scale, k.noise
+            )
+        } else {
+            format!("length scale {}, noise {:e}", k.length_scale, k.noise)
+        },
         store.transform().name(),
         r.fit.optimizer.name()
     )?;

@@ -26,6 +26,16 @@ impl Default for Kernel {
 pub const LENGTH_SCALE_RANGE: (f64, f64) = (1e-6, 1e6);
 /// Smallest and largest noise a kernel may have.
 pub const NOISE_RANGE: (f64, f64) = (1e-15, 1e6);
+/// Where a length scale learned by maximum likelihood is kept. The latent
+/// points lie in `[-1, 1]^q`: below 0.05 the materials would be
+/// uncorrelated bumps 1/40 of the box wide; above 20 every pair is closer
+/// than a tenth of `l` and `K` is all but singular.
+pub const LEARNED_LENGTH_SCALE_RANGE: (f64, f64) = (0.05, 20.0);
+/// Where a noise learned by maximum likelihood is kept (relative to the
+/// data's mean variance, which the fit normalises to 1): at most 10, where
+/// the model explains nothing, and at least 1e-8, which keeps the condition
+/// number of `K` below about 1e8 even when two materials coincide.
+pub const LEARNED_NOISE_RANGE: (f64, f64) = (1e-8, 10.0);
 
 impl Kernel {
     /// Check the hyperparameters lie in [`LENGTH_SCALE_RANGE`] and

@@ -129,15 +129,31 @@ pub fn cost(kernel: &Kernel, data: &GramData, x: MatRef<'_, f64>) -> Result<f64>
     Ok(0.5 * data.d as f64 * logdet + 0.5 * trace_product(inv.as_ref(), data.y()))
 }
 
-/// The cost and its gradient with respect to `x`, from scratch.
+/// The gradient of the cost with respect to the latent points and to the
+/// logarithms of the kernel's hyperparameters.
+#[derive(Debug, Clone)]
+pub struct Gradient {
+    /// `dL/dx`, `N x q`.
+    pub latent: Mat<f64>,
+    /// `dL/d(ln l)`.
+    pub log_length_scale: f64,
+    /// `dL/d(ln mu)`.
+    pub log_noise: f64,
+}
+
+/// The cost and its gradient with respect to `x`, `ln l` and `ln mu`.
 ///
-/// With `G = d K^-1 - K^-1 Y K^-1`, `dL = 1/2 tr(G dK)` and
-/// `dL/dx_i = -sum_j G_ij k_ij (x_i - x_j) / l^2`.
-pub fn cost_and_gradient(
+/// With `G = d K^-1 - K^-1 Y K^-1`, `dL = 1/2 tr(G dK)`, so
+/// `dL/dx_i = -sum_j G_ij k_ij (x_i - x_j) / l^2`;
+/// `dK_ij/d(ln l) = k_ij |x_i - x_j|^2 / l^2` off the diagonal (where `k_ij`
+/// is the RBF, 1 on the diagonal whatever `l`) and `dK/d(ln mu) = mu I`, so
+/// `dL/d(ln l) = 1/2 sum_ij G_ij k_ij |x_i - x_j|^2 / l^2` and
+/// `dL/d(ln mu) = 1/2 mu tr(G)`.
+pub fn cost_and_full_gradient(
     kernel: &Kernel,
     data: &GramData,
     x: MatRef<'_, f64>,
-) -> Result<(f64, Mat<f64>)> {
+) -> Result<(f64, Gradient)> {
     let (n, q) = (x.nrows(), x.ncols());
     let k = kernel.matrix(x);
     let (logdet, inv) = factor(k.as_ref(), "dense gradient")?;
@@ -145,20 +161,33 @@ pub fn cost_and_gradient(
     let cost = 0.5 * d * logdet + 0.5 * trace_product(inv.as_ref(), data.y());
     let kyk = sandwich(inv.as_ref(), data.y());
     let l2 = kernel.length_scale * kernel.length_scale;
-    let mut grad = Mat::<f64>::zeros(n, q);
+    let mut latent = Mat::<f64>::zeros(n, q);
+    let (mut dlength, mut trace_g) = (0.0, 0.0);
     for i in 0..n {
+        trace_g += d * inv[(i, i)] - kyk[(i, i)];
         for j in 0..n {
             if i == j {
                 continue;
             }
             let g = d * inv[(i, j)] - kyk[(i, j)];
             let w = g * k[(i, j)] / l2;
+            let mut r2 = 0.0;
             for c in 0..q {
-                grad[(i, c)] -= w * (x[(i, c)] - x[(j, c)]);
+                let dx = x[(i, c)] - x[(j, c)];
+                latent[(i, c)] -= w * dx;
+                r2 += dx * dx;
             }
+            dlength += w * r2;
         }
     }
-    Ok((cost, grad))
+    Ok((
+        cost,
+        Gradient {
+            latent,
+            log_length_scale: 0.5 * dlength,
+            log_noise: 0.5 * kernel.noise * trace_g,
+        },
+    ))
 }
 
 #[cfg(test)]
@@ -195,7 +224,7 @@ mod tests {
             length_scale: 0.7,
             noise: 1e-2,
         };
-        let (_, g) = cost_and_gradient(&kernel, &data, x.as_ref()).unwrap();
+        let g = cost_and_full_gradient(&kernel, &data, x.as_ref()).unwrap().1.latent;
         let h = 1e-6;
         for i in 0..8 {
             for c in 0..2 {
@@ -210,6 +239,42 @@ mod tests {
                     (fd - g[(i, c)]).abs() <= 1e-5 * fd.abs().max(1.0),
                     "({i},{c}): fd {fd} vs {}",
                     g[(i, c)]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn kernel_gradient_matches_finite_differences() {
+        let (data, x) = random_problem(9, 30, 12);
+        for kernel in [
+            Kernel {
+                length_scale: 0.7,
+                noise: 1e-2,
+            },
+            Kernel {
+                length_scale: 2.5,
+                noise: 0.3,
+            },
+        ] {
+            let (_, g) = cost_and_full_gradient(&kernel, &data, x.as_ref()).unwrap();
+            let h = 1e-6;
+            let at = |dl: f64, dm: f64| {
+                let k = Kernel {
+                    length_scale: kernel.length_scale * dl.exp(),
+                    noise: kernel.noise * dm.exp(),
+                };
+                cost(&k, &data, x.as_ref()).unwrap()
+            };
+            let fd_l = (at(h, 0.0) - at(-h, 0.0)) / (2.0 * h);
+            let fd_m = (at(0.0, h) - at(0.0, -h)) / (2.0 * h);
+            for (name, fd, got) in [
+                ("ln l", fd_l, g.log_length_scale),
+                ("ln mu", fd_m, g.log_noise),
+            ] {
+                assert!(
+                    (fd - got).abs() <= 1e-5 * fd.abs().max(1.0),
+                    "{kernel:?} {name}: fd {fd} vs {got}"
                 );
             }
         }

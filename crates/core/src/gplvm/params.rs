@@ -16,7 +16,7 @@ use faer::Mat;
 use crate::error::{ParamError, Result};
 use crate::gplvm::kernel::Kernel;
 use crate::gplvm::likelihood::GramData;
-use crate::gplvm::optim::{HookeJeeves, Lbfgs, Optimizer, OptimizerKind, Outcome, Problem};
+use crate::gplvm::optim::{BOX, HookeJeeves, Lbfgs, Optimizer, OptimizerKind, Outcome, Problem};
 use crate::gplvm::pca::dual_pca;
 use crate::progress::Progress;
 
@@ -66,6 +66,13 @@ impl GplvmParams {
         self
     }
 
+    /// Learn the kernel's length scale and noise by maximum likelihood with
+    /// the latent points, starting from the kernel given (L-BFGS only).
+    pub fn learn_kernel(mut self, learn: bool) -> Self {
+        self.lbfgs.learn_kernel = learn;
+        self
+    }
+
     /// Which optimiser fits the latent points.
     pub fn optimizer(mut self, kind: OptimizerKind) -> Self {
         self.optimizer = kind;
@@ -98,6 +105,9 @@ impl GplvmParams {
             return Err(ParamError::LatentDim { q: self.q, max }.into());
         }
         self.kernel.check()?;
+        if self.lbfgs.learn_kernel && self.optimizer != OptimizerKind::Lbfgs {
+            return Err(ParamError::LearnKernelNeedsLbfgs.into());
+        }
         let hj = self.hooke_jeeves;
         if !(hj.min_step > 0.0 && hj.initial_step >= hj.min_step && hj.initial_step <= 2.0) {
             return Err(ParamError::Steps {
@@ -120,8 +130,10 @@ pub struct CheckedParams(GplvmParams);
 /// A fitted latent space.
 #[derive(Debug, Clone)]
 pub struct Fit {
-    /// The kernel used.
+    /// The kernel of the fitted model: the one given, or the one learned.
     pub kernel: Kernel,
+    /// Whether the kernel was learned with the latent points.
+    pub learned_kernel: bool,
     /// The optimiser used.
     pub optimizer: OptimizerKind,
     /// The PCA start, `N x q`.
@@ -150,15 +162,55 @@ impl CheckedParams {
             OptimizerKind::HookeJeeves => &p.hooke_jeeves,
             OptimizerKind::Lbfgs => &p.lbfgs,
         };
-        let outcome = optimizer.minimize(&problem, start.clone(), progress)?;
+        let mut outcome = optimizer.minimize(&problem, start.clone(), progress)?;
+        let learned_kernel = p.optimizer == OptimizerKind::Lbfgs && p.lbfgs.learn_kernel;
+        if learned_kernel {
+            fill_the_box(&mut outcome);
+        }
         Ok(Fit {
-            kernel: p.kernel,
+            kernel: outcome.kernel,
+            learned_kernel,
             optimizer: p.optimizer,
             start,
             eigenvalues,
             outcome,
         })
     }
+}
+
+/// Translate the latent points so that their bounding box is centred on the
+/// origin, and scale them and the length scale by one factor so that the
+/// box's larger half-width is 1.
+///
+/// The kernel depends on `|x_i - x_j| / l` only, so the cost and every
+/// reconstruction are unchanged; what changes is that the map's default
+/// view, which frames `[-1, 1]^2`, frames the materials. A learned kernel
+/// needs this: with the length scale free, the likelihood does not care
+/// how large the configuration is, and the optimum found often fills a
+/// fraction of the box.
+fn fill_the_box(outcome: &mut Outcome) {
+    let x = &mut outcome.latent;
+    let (n, q) = (x.nrows(), x.ncols());
+    let mut half = 0.0f64;
+    let mut centre = vec![0.0; q];
+    for (c, m) in centre.iter_mut().enumerate() {
+        let (lo, hi) = (0..n).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), i| {
+            (lo.min(x[(i, c)]), hi.max(x[(i, c)]))
+        });
+        *m = 0.5 * (lo + hi);
+        half = half.max(0.5 * (hi - lo));
+    }
+    if !(half > 0.0 && half.is_finite()) {
+        return;
+    }
+    let s = 1.0 / half;
+    for i in 0..n {
+        for c in 0..q {
+            // Clamped against rounding: the extreme points land on +-1.
+            x[(i, c)] = ((x[(i, c)] - centre[c]) * s).clamp(BOX.0, BOX.1);
+        }
+    }
+    outcome.kernel.length_scale *= s;
 }
 
 #[cfg(test)]
@@ -293,10 +345,15 @@ mod tests {
             }
             let data = GramData::new(&z * z.transpose(), d).unwrap();
             for &noise in &kernel_cases {
-                for kind in [OptimizerKind::HookeJeeves, OptimizerKind::Lbfgs] {
+                for (kind, learn) in [
+                    (OptimizerKind::HookeJeeves, false),
+                    (OptimizerKind::Lbfgs, false),
+                    (OptimizerKind::Lbfgs, true),
+                ] {
                     let fit = GplvmParams::new(q)
                         .noise(noise)
                         .optimizer(kind)
+                        .learn_kernel(learn)
                         .check()
                         .unwrap()
                         .fit(&data, &NoProgress);
@@ -326,9 +383,106 @@ mod tests {
         assert!(e.contains("q = 1") && e.contains("N = 1"), "{e}");
     }
 
+    /// Centre the columns of `z` and make its Gram data.
+    fn gram_of(mut z: Mat<f64>) -> GramData {
+        let (n, d) = (z.nrows(), z.ncols());
+        for j in 0..d {
+            let m: f64 = (0..n).map(|i| z[(i, j)]).sum::<f64>() / n as f64;
+            (0..n).for_each(|i| z[(i, j)] -= m);
+        }
+        GramData::new(&z * z.transpose(), d).unwrap()
+    }
+
+    fn learned(data: &GramData, q: usize, noise: f64) -> Fit {
+        GplvmParams::new(q)
+            .noise(noise)
+            .optimizer(OptimizerKind::Lbfgs)
+            .learn_kernel(true)
+            .check()
+            .unwrap()
+            .fit(data, &NoProgress)
+            .unwrap()
+    }
+
+    #[test]
+    fn a_learned_kernel_lowers_the_cost_and_is_its_own_optimum() {
+        use crate::gplvm::kernel::{LEARNED_LENGTH_SCALE_RANGE, LEARNED_NOISE_RANGE};
+        let data = curve(25, 3);
+        let fixed = GplvmParams::new(2)
+            .optimizer(OptimizerKind::Lbfgs)
+            .check()
+            .unwrap()
+            .fit(&data, &NoProgress)
+            .unwrap();
+        let fit = learned(&data, 2, 1e-4);
+        assert!(fit.learned_kernel && !fixed.learned_kernel);
+        check_box_and_monotone(&data, &fit.kernel, &fit.outcome);
+        assert!(fit.outcome.cost < fixed.outcome.cost, "{fit:?}");
+        let k = fit.kernel;
+        assert!((LEARNED_LENGTH_SCALE_RANGE.0..=LEARNED_LENGTH_SCALE_RANGE.1).contains(&k.length_scale));
+        assert!((LEARNED_NOISE_RANGE.0..=LEARNED_NOISE_RANGE.1).contains(&k.noise));
+        // At the learned kernel, the dense cost rises when either
+        // hyperparameter moves by 1% in either direction (unless at a bound).
+        let x = fit.outcome.latent.as_ref();
+        let at = |l: f64, mu: f64| {
+            let k = Kernel { length_scale: l, noise: mu };
+            cost(&k, &data, x).unwrap()
+        };
+        let best = at(k.length_scale, k.noise);
+        // The points fill the box (the fit translated and scaled them with
+        // the length scale), and the cost is the optimiser's own.
+        let extent = |c: usize| {
+            let v: Vec<f64> = (0..25).map(|i| x[(i, c)]).collect();
+            (v.iter().cloned().fold(f64::INFINITY, f64::min), v.iter().cloned().fold(f64::NEG_INFINITY, f64::max))
+        };
+        let (e0, e1) = (extent(0), extent(1));
+        let half = (0.5 * (e0.1 - e0.0)).max(0.5 * (e1.1 - e1.0));
+        assert!((half - 1.0).abs() < 1e-12, "{e0:?} {e1:?}");
+        assert!(((e0.0 + e0.1) / 2.0).abs() < 1e-12 && ((e1.0 + e1.1) / 2.0).abs() < 1e-12);
+        for (dl, dm) in [(1.01, 1.0), (0.99, 1.0), (1.0, 1.01), (1.0, 0.99)] {
+            let (l, mu) = (k.length_scale * dl, k.noise * dm);
+            if l <= LEARNED_LENGTH_SCALE_RANGE.1 && mu >= LEARNED_NOISE_RANGE.0 && mu <= LEARNED_NOISE_RANGE.1 {
+                assert!(at(l, mu) >= best - 1e-9 * best.abs(), "{dl} {dm}: {} < {best}", at(l, mu));
+            }
+        }
+    }
+
+    #[test]
+    fn learned_noise_driven_to_either_bound_stays_finite() {
+        use crate::gplvm::kernel::{LEARNED_NOISE_RANGE};
+        let mut rng = SplitMix64::new(21);
+        // Pure noise, no structure: the likelihood makes the materials
+        // uncorrelated, by a noise as large as the signal or by a length
+        // scale at its lower bound (with unit signal variance the two
+        // explain independent data equally).
+        let noise = gram_of(Mat::from_fn(12, 400, |_, _| rng.range(-1.0, 1.0)));
+        let fit = learned(&noise, 2, 1e-4);
+        let k = fit.kernel.matrix(fit.outcome.latent.as_ref());
+        let most = (0..12)
+            .flat_map(|i| (0..12).filter(move |&j| j != i).map(move |j| (i, j)))
+            .fold(0.0f64, |m, (i, j)| m.max(k[(i, j)] / k[(i, i)]));
+        assert!(most < 0.2, "correlation {most} with {:?}", fit.kernel);
+        // Exactly on a smooth 1-D curve, with twins: the noise wants zero.
+        let exact = gram_of(Mat::from_fn(14, 60, |i, j| {
+            let t = (i / 2) as f64 * 0.4;
+            (t * (1.0 + j as f64 * 0.05)).sin()
+        }));
+        let fit = learned(&exact, 1, 1e-4);
+        assert!(fit.kernel.noise < 1e-6, "{:?}", fit.kernel);
+        for f in [&fit, &learned(&noise, 2, 1.0)] {
+            let o = &f.outcome;
+            assert!(o.cost.is_finite() && o.latent.as_ref().norm_max() <= 1.0);
+            assert!(f.kernel.noise >= LEARNED_NOISE_RANGE.0);
+            let k = f.kernel.matrix(o.latent.as_ref());
+            assert!(k.llt(faer::Side::Lower).is_ok(), "K not SPD: {:?}", f.kernel);
+        }
+    }
+
     #[test]
     fn parameters_are_checked() {
         assert!(GplvmParams::new(2).noise(0.0).check().is_err());
+        let e = GplvmParams::new(2).learn_kernel(true).check().unwrap_err();
+        assert!(e.to_string().contains("L-BFGS"), "{e}");
         assert!(GplvmParams::new(2).length_scale(f64::NAN).check().is_err());
         assert!(GplvmParams::new(0).check().is_err());
         assert!(

@@ -40,6 +40,10 @@ pub struct StoreRef {
 pub struct FitRecord {
     /// Optimiser used.
     pub optimizer: OptimizerKind,
+    /// Whether the kernel was learned with the latent points (absent in
+    /// models written before it could be: false).
+    #[serde(default)]
+    pub learned_kernel: bool,
     /// Cost at the PCA start.
     pub initial_cost: f64,
     /// Final cost `d/2 log|K| + 1/2 tr(K^-1 Y)` (normalised `Y`).
@@ -116,6 +120,7 @@ impl ModelFile {
             signal_variance: gram.scale2(),
             fit: FitRecord {
                 optimizer: fit.optimizer,
+                learned_kernel: fit.learned_kernel,
                 initial_cost: o.initial_cost,
                 cost: o.cost,
                 iterations: o.iterations,

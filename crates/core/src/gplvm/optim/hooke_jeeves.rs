@@ -167,6 +167,7 @@ impl Optimizer for HookeJeeves {
         let final_cost = cost(&problem.kernel, problem.data, latent.as_ref())?;
         Ok(Outcome {
             latent,
+            kernel: problem.kernel,
             cost: final_cost,
             initial_cost,
             iterations,

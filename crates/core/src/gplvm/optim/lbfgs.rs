@@ -4,6 +4,12 @@
 //! two-loop recursion gives the direction on the free ones, and a
 //! backtracking line search on the projected path `P(x + a p)` enforces
 //! sufficient decrease, so the cost never rises.
+//!
+//! With [`Lbfgs::learn_kernel`] the kernel's length scale and noise are
+//! variables too, as `ln l` and `ln mu` within
+//! [`LEARNED_LENGTH_SCALE_RANGE`] and [`LEARNED_NOISE_RANGE`]: the maximum
+//! likelihood estimate of the kernel together with the latent points, as
+//! general GPLVM implementations fit it.
 
 use std::collections::VecDeque;
 
@@ -12,7 +18,8 @@ use faer::Mat;
 use super::{BOX, Optimizer, Outcome, Problem};
 use crate::error::Result;
 use crate::gplvm::incremental::DriftStats;
-use crate::gplvm::likelihood::cost_and_gradient;
+use crate::gplvm::kernel::{Kernel, LEARNED_LENGTH_SCALE_RANGE, LEARNED_NOISE_RANGE};
+use crate::gplvm::likelihood::cost_and_full_gradient;
 use crate::progress::Progress;
 
 /// L-BFGS settings.
@@ -26,6 +33,9 @@ pub struct Lbfgs {
     pub gradient_tolerance: f64,
     /// Stop when an iteration lowers the cost by less than this, relatively.
     pub cost_tolerance: f64,
+    /// Learn the kernel's length scale and noise with the latent points
+    /// (the problem's kernel is then the start).
+    pub learn_kernel: bool,
 }
 
 impl Default for Lbfgs {
@@ -35,6 +45,7 @@ impl Default for Lbfgs {
             max_iterations: 2000,
             gradient_tolerance: 1e-9,
             cost_tolerance: 1e-13,
+            learn_kernel: false,
         }
     }
 }
@@ -50,9 +61,55 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
-/// Is coordinate `k` pinned at a bound by a gradient pointing outward?
-fn pinned(x: f64, g: f64) -> bool {
-    (x <= BOX.0 && g > 0.0) || (x >= BOX.1 && g < 0.0)
+/// Is a variable pinned at a bound of `(lo, hi)` by a gradient pointing outward?
+fn pinned(x: f64, g: f64, (lo, hi): (f64, f64)) -> bool {
+    (x <= lo && g > 0.0) || (x >= hi && g < 0.0)
+}
+
+/// The variables: the latent points row by row, then `ln l` and `ln mu`
+/// when the kernel is learned.
+struct Layout {
+    n: usize,
+    q: usize,
+    kernel: Kernel,
+    learn: bool,
+}
+
+impl Layout {
+    fn bounds(&self) -> Vec<(f64, f64)> {
+        let mut b = vec![BOX; self.n * self.q];
+        if self.learn {
+            let ln = |(lo, hi): (f64, f64)| (lo.ln(), hi.ln());
+            b.push(ln(LEARNED_LENGTH_SCALE_RANGE));
+            b.push(ln(LEARNED_NOISE_RANGE));
+        }
+        b
+    }
+
+    fn pack(&self, latent: &Mat<f64>, kernel: &Kernel) -> Vec<f64> {
+        let mut v = flat(latent);
+        if self.learn {
+            v.push(kernel.length_scale.ln());
+            v.push(kernel.noise.ln());
+        }
+        v
+    }
+
+    fn latent(&self, v: &[f64]) -> Mat<f64> {
+        Mat::from_fn(self.n, self.q, |i, c| v[i * self.q + c])
+    }
+
+    fn kernel(&self, v: &[f64]) -> Kernel {
+        if self.learn {
+            let m = self.n * self.q;
+            Kernel {
+                length_scale: v[m].exp(),
+                noise: v[m + 1].exp(),
+            }
+        } else {
+            self.kernel
+        }
+    }
 }
 
 impl Optimizer for Lbfgs {
@@ -66,13 +123,29 @@ impl Optimizer for Lbfgs {
         start: Mat<f64>,
         progress: &dyn Progress,
     ) -> Result<Outcome> {
-        let (n, q) = (start.nrows(), start.ncols());
-        let shape = |v: &[f64]| Mat::from_fn(n, q, |i, c| v[i * q + c]);
-        let eval = |v: &[f64]| -> Result<(f64, Vec<f64>)> {
-            let (c, g) = cost_and_gradient(&problem.kernel, problem.data, shape(v).as_ref())?;
-            Ok((c, flat(&g)))
+        let layout = Layout {
+            n: start.nrows(),
+            q: start.ncols(),
+            kernel: problem.kernel,
+            learn: self.learn_kernel,
         };
-        let mut x: Vec<f64> = flat(&start).iter().map(|v| v.clamp(BOX.0, BOX.1)).collect();
+        let bounds = layout.bounds();
+        let project = |v: f64, (lo, hi): (f64, f64)| v.clamp(lo, hi);
+        let eval = |v: &[f64]| -> Result<(f64, Vec<f64>)> {
+            let kernel = layout.kernel(v);
+            let (c, g) = cost_and_full_gradient(&kernel, problem.data, layout.latent(v).as_ref())?;
+            let mut flat_g = flat(&g.latent);
+            if layout.learn {
+                flat_g.extend([g.log_length_scale, g.log_noise]);
+            }
+            Ok((c, flat_g))
+        };
+        let mut x: Vec<f64> = layout
+            .pack(&start, &problem.kernel)
+            .iter()
+            .zip(&bounds)
+            .map(|(&v, &b)| project(v, b))
+            .collect();
         let (mut f, mut g) = eval(&x)?;
         let initial_cost = f;
         let mut history = vec![f];
@@ -81,7 +154,9 @@ impl Optimizer for Lbfgs {
         let scale = problem.data.d() as f64;
         progress.start("optimise", self.max_iterations);
         while iterations < self.max_iterations {
-            let free: Vec<bool> = x.iter().zip(&g).map(|(&xi, &gi)| !pinned(xi, gi)).collect();
+            let free: Vec<bool> = (0..x.len())
+                .map(|k| !pinned(x[k], g[k], bounds[k]))
+                .collect();
             let pg: Vec<f64> = g
                 .iter()
                 .zip(&free)
@@ -122,10 +197,8 @@ impl Optimizer for Lbfgs {
             let mut step = 1.0;
             let mut accepted = None;
             for _ in 0..40 {
-                let xn: Vec<f64> = x
-                    .iter()
-                    .zip(&p)
-                    .map(|(xi, pi)| (xi + step * pi).clamp(BOX.0, BOX.1))
+                let xn: Vec<f64> = (0..x.len())
+                    .map(|k| project(x[k] + step * p[k], bounds[k]))
                     .collect();
                 let moved: Vec<f64> = xn.iter().zip(&x).map(|(a, b)| a - b).collect();
                 evaluations += 1;
@@ -161,7 +234,8 @@ impl Optimizer for Lbfgs {
         }
         progress.finish();
         Ok(Outcome {
-            latent: shape(&x),
+            latent: layout.latent(&x),
+            kernel: layout.kernel(&x),
             cost: f,
             initial_cost,
             iterations,

@@ -23,7 +23,7 @@ pub const BOX: (f64, f64) = (-1.0, 1.0);
 
 /// What an optimiser minimises: the cost of latent points for this data and kernel.
 pub struct Problem<'a> {
-    /// Kernel hyperparameters (fixed during the fit).
+    /// Kernel hyperparameters (the start, when the optimiser learns them).
     pub kernel: Kernel,
     /// The normalised Gram matrix and `d`.
     pub data: &'a GramData,
@@ -34,6 +34,8 @@ pub struct Problem<'a> {
 pub struct Outcome {
     /// Final latent points, `N x q`, inside the box.
     pub latent: Mat<f64>,
+    /// The kernel at the end: the problem's, or the one learned with the points.
+    pub kernel: Kernel,
     /// Cost at `latent`, recomputed densely.
     pub cost: f64,
     /// Cost at the start.
