@@ -41,9 +41,10 @@ fn leave_one_out(model: &Model) -> Result<(), Box<dyn std::error::Error>> {
     let mut predictors = vec![gp.clone()];
     let mut names = vec!["gp".to_string()];
     let mut moved = vec![0];
+    let (mut mixes, mut mix_names, mut mix_moved) = (vec![], vec![], vec![]);
     for l in scales {
         let k = brdf_atlas_core::Kernel {
-            length_scale: l,
+            length_scale: l * kernel.length_scale,
             ..kernel
         };
         let convex = loo::convex_predictor(&k, latent)?;
@@ -54,8 +55,33 @@ fn leave_one_out(model: &Model) -> Result<(), Box<dyn std::error::Error>> {
             &budgets,
             &NoProgress,
         )?;
+        let banded = loo::banded_steps(
+            model.store(),
+            gp.as_ref(),
+            convex.as_ref(),
+            &budgets,
+            &NoProgress,
+        )?;
+        let lc = k.length_scale * loo::CONVEX_LENGTH_RATIO;
+        for (b, steps) in budgets.iter().zip(banded) {
+            let n = model.names().len();
+            let moved_materials = (0..n)
+                .filter(|&i| steps.chunks_exact(n).any(|band| band[i] > 0.0))
+                .count();
+            mix_names.push(format!(
+                "banded l={lc:.3} budget={}% ({} of {} bands moved)",
+                100.0 * b,
+                steps.iter().filter(|&&t| t > 0.0).count(),
+                steps.len()
+            ));
+            mix_moved.push(moved_materials);
+            mixes.push(loo::Mix {
+                from: 0,
+                towards: predictors.len(),
+                steps,
+            });
+        }
         predictors.push(convex);
-        let lc = l * loo::CONVEX_LENGTH_RATIO;
         names.push(format!("convex l={lc:.3}"));
         moved.push(0);
         for (b, (p, steps)) in budgets.iter().zip(rules) {
@@ -64,7 +90,9 @@ fn leave_one_out(model: &Model) -> Result<(), Box<dyn std::error::Error>> {
             moved.push(steps.iter().filter(|&&t| t > 0.0).count());
         }
     }
-    let ev = loo::evaluate(model.store(), &predictors, &NoProgress)?;
+    let ev = loo::evaluate_mixed(model.store(), &predictors, &mixes, &NoProgress)?;
+    names.extend(mix_names);
+    moved.extend(mix_moved);
     let base = ev.errors[0].log_total(ev.scored_rows);
     for ((name, e), m) in names.iter().zip(&ev.errors).zip(&moved) {
         let err = e.log_total(ev.scored_rows);

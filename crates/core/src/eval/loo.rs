@@ -45,7 +45,7 @@ use crate::simd::fold::{GROUPS, ordered_blocks_then};
 /// Rows of the store per block of the LOO pass.
 const BLOCK: usize = 1024;
 
-pub use super::nonneg::{convex_predictor, plausible_predictors};
+pub use super::nonneg::{banded_steps, convex_predictor, plausible_predictors};
 pub use super::predictors::{discarded, gp_predictor, pca_in_sample_predictor, pca_predictor};
 pub use crate::query::budget::{CLAMP_BUDGET, CONVEX_LENGTH_RATIO, STEPS};
 
@@ -116,6 +116,31 @@ pub fn evaluate(
     predictors: &[Mat<f64>],
     progress: &dyn Progress,
 ) -> Result<Evaluation> {
+    evaluate_mixed(store, predictors, &[], progress)
+}
+
+/// A predictor mixed row by row from two of [`evaluate_mixed`]'s matrix
+/// predictors: material `i` in `theta_h` bin `b` is predicted by
+/// `(1 - t) P_from + t P_towards`, `t = steps[b * N + i]` (see
+/// [`banded_steps`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mix {
+    /// Index of the predictor at `t = 0`.
+    pub from: usize,
+    /// Index of the predictor at `t = 1`.
+    pub towards: usize,
+    /// The steps, `theta_h` bin by bin, `N` per bin.
+    pub steps: Vec<f64>,
+}
+
+/// [`evaluate`] with mixed predictors after the matrix ones: the errors
+/// come in the order `predictors`, then `mixes`.
+pub fn evaluate_mixed(
+    store: &Store,
+    predictors: &[Mat<f64>],
+    mixes: &[Mix],
+    progress: &dyn Progress,
+) -> Result<Evaluation> {
     let n = store.n();
     let count = predictors.len();
     if let Some(p) = predictors.iter().find(|p| p.nrows() != n || p.ncols() != n) {
@@ -126,7 +151,21 @@ pub fn evaluate(
         }
         .into());
     }
+    let theta_h = store.dims().theta_h;
+    if let Some(m) = mixes
+        .iter()
+        .find(|m| m.from >= count || m.towards >= count || m.steps.len() != theta_h * n)
+    {
+        return Err(ParamError::PredictorShape {
+            rows: m.steps.len(),
+            cols: m.from.max(m.towards),
+            n,
+        }
+        .into());
+    }
     let mn = count * n;
+    // Predictions per row: the matrix predictors', then the mixed ones'.
+    let mt = mn + mixes.len() * n;
     // All predictors stacked: row m * N + i predicts material i by method m.
     // Column-major mn x n.
     let stacked: Vec<f64> = (0..n)
@@ -155,6 +194,7 @@ pub fn evaluate(
         scored: usize,
         zbuf: Vec<f64>,
         out: Vec<f64>,
+        mixed: Vec<f64>,
         row: RowScratch,
     }
     // Each group's buffers (`out` is `BLOCK x` predictors `x N` values)
@@ -165,13 +205,14 @@ pub fn evaluate(
         GROUPS,
         || Group {
             sums: Sums {
-                transformed: vec![0.0; mn],
-                raw: vec![0.0; mn],
-                log: vec![0.0; mn],
+                transformed: vec![0.0; mt],
+                raw: vec![0.0; mt],
+                log: vec![0.0; mt],
             },
             scored: 0,
             zbuf: vec![0.0f64; BLOCK * n],
             out: vec![0.0f64; BLOCK * mn],
+            mixed: vec![0.0f64; if mixes.is_empty() { 0 } else { BLOCK * mt }],
             row: RowScratch {
                 truth: vec![0.0; n],
                 reflectance: vec![0.0; n],
@@ -190,13 +231,30 @@ pub fn evaluate(
             }
             // Bin-major rows are the columns of an n x len matrix.
             matmul(&mut g.out[..len * mn], &stacked, z, n);
-            g.scored += score_block(&scoring, r0, z, &g.out[..len * mn], &mut g.sums, &mut g.row);
+            let out = if mixes.is_empty() {
+                &g.out[..len * mn]
+            } else {
+                for k in 0..len {
+                    let band = dims.unbin((r0 + k) % bins).0;
+                    let (src, dst) = (&g.out[k * mn..(k + 1) * mn], &mut g.mixed[k * mt..(k + 1) * mt]);
+                    dst[..mn].copy_from_slice(src);
+                    for (m, mix) in mixes.iter().enumerate() {
+                        let steps = &mix.steps[band * n..(band + 1) * n];
+                        for i in 0..n {
+                            let (a, b) = (src[mix.from * n + i], src[mix.towards * n + i]);
+                            dst[mn + m * n + i] = a + steps[i] * (b - a);
+                        }
+                    }
+                }
+                &g.mixed[..len * mt]
+            };
+            g.scored += score_block(&scoring, r0, z, out, &mut g.sums, &mut g.row);
             progress.advance(len as u64);
         },
         |g| (g.sums, g.scored),
     );
     progress.finish();
-    let (mut et, mut ef, mut el, mut scored) = (vec![0.0; mn], vec![0.0; mn], vec![0.0; mn], 0);
+    let (mut et, mut ef, mut el, mut scored) = (vec![0.0; mt], vec![0.0; mt], vec![0.0; mt], 0);
     for (sums, group_scored) in partials {
         et.iter_mut()
             .zip(sums.transformed)
@@ -205,7 +263,7 @@ pub fn evaluate(
         el.iter_mut().zip(sums.log).for_each(|(a, b)| *a += b);
         scored += group_scored;
     }
-    let errors = (0..count)
+    let errors = (0..count + mixes.len())
         .map(|m| Errors {
             transformed: et[m * n..(m + 1) * n].to_vec(),
             raw: ef[m * n..(m + 1) * n].to_vec(),

@@ -17,11 +17,14 @@ use crate::dense::product::matmul;
 use crate::error::{ParamError, Result};
 use crate::gplvm::kernel::{Kernel, rows_of};
 use crate::progress::Progress;
-use crate::query::budget::{Budget, convex_weights, counted};
+use crate::query::budget::{Budget, STEPS, convex_weights, counted};
 use crate::simd::fold::{GROUPS, ordered_blocks_then};
 
 /// Rows of the store per block of the pass.
 const BLOCK: usize = 1024;
+
+/// The most the passes' partial sums may hold at once, in bytes.
+const PARTIALS_BUDGET: usize = 64 << 20;
 
 /// The convex leave-one-out predictor of [`crate::BlendRule::Plausible`]:
 /// row `i` holds the convex weights at `x_i` of the other materials
@@ -49,6 +52,48 @@ pub fn plausible_predictors(
     budgets: &[f64],
     progress: &dyn Progress,
 ) -> Result<Vec<(Mat<f64>, Vec<f64>)>> {
+    let budget = budget_pass(store, gp, convex, false, progress)?;
+    let n = store.n();
+    Ok(budgets
+        .iter()
+        .map(|&b| {
+            let steps = budget.steps(b);
+            let p = Mat::from_fn(n, n, |i, j| {
+                (1.0 - steps[i]) * gp[(i, j)] + steps[i] * convex[(i, j)]
+            });
+            (p, steps)
+        })
+        .collect())
+}
+
+/// The steps of the banded variant of the plausible rule, one set per
+/// budget in `budgets`: the GP's leave-one-out prediction of material `i`
+/// moves towards the convex one by its own step in each `theta_h` bin, the
+/// smallest of [`crate::loo::STEPS`] for which the clamp removes at most
+/// the budget's share of that bin's cosine-weighted reflectance. Steps are
+/// laid out bin by bin (`steps[band * N + i]`), to be mixed by
+/// [`crate::loo::Mix`].
+pub fn banded_steps(
+    store: &Store,
+    gp: MatRef<'_, f64>,
+    convex: MatRef<'_, f64>,
+    budgets: &[f64],
+    progress: &dyn Progress,
+) -> Result<Vec<Vec<f64>>> {
+    let budget = budget_pass(store, gp, convex, true, progress)?;
+    Ok(budgets.iter().map(|&b| budget.steps(b)).collect())
+}
+
+/// One pass over the store: the clamp budget of every step for the GP and
+/// convex leave-one-out predictions of every material, over the whole table
+/// or per `theta_h` bin.
+fn budget_pass(
+    store: &Store,
+    gp: MatRef<'_, f64>,
+    convex: MatRef<'_, f64>,
+    banded: bool,
+    progress: &dyn Progress,
+) -> Result<Budget> {
     let n = store.n();
     for p in [gp, convex] {
         if p.nrows() != n || p.ncols() != n {
@@ -73,17 +118,30 @@ pub fn plausible_predictors(
         })
         .collect();
     let dims = store.dims();
+    let bands = if banded { dims.theta_h } else { 1 };
+    let band_of = |row: usize| {
+        if banded {
+            dims.unbin(row % dims.bins()).0
+        } else {
+            0
+        }
+    };
     let transform = store.transform().build(dims);
     let cos = crate::data::transform::cosine_products(dims);
     let mean = store.mean();
+    // Each group's partial sums wait for the ordered fold: keep them within
+    // 64 MB together (the group count depends on N and the dims only, so
+    // the bits do not depend on the thread count).
+    let partial_bytes = n * bands * 2 * STEPS.len() * std::mem::size_of::<f64>();
+    let groups = (PARTIALS_BUDGET / partial_bytes.max(1)).clamp(1, GROUPS);
     progress.start("plausible steps", store.rows() as u64);
     let parts = ordered_blocks_then(
         store.rows(),
         BLOCK,
-        GROUPS,
+        groups,
         || {
             (
-                Budget::new(n),
+                Budget::new(n, bands),
                 vec![0.0f64; BLOCK * n],
                 vec![0.0f64; BLOCK * 2 * n],
             )
@@ -107,25 +165,16 @@ pub fn plausible_predictors(
                 };
                 let col = &mut out[k * 2 * n..(k + 1) * 2 * n];
                 col.iter_mut().for_each(|v| *v += mean[row]);
-                budget.add(&col[..n], &col[n..], form, cos[row % dims.bins()]);
+                budget.add(band_of(row), &col[..n], &col[n..], form, cos[row % dims.bins()]);
             }
             progress.advance(len as u64);
         },
         |(budget, _, _)| budget,
     );
     progress.finish();
-    let mut budget = Budget::new(n);
+    let mut budget = Budget::new(n, bands);
     for b in &parts {
         budget.merge(b);
     }
-    Ok(budgets
-        .iter()
-        .map(|&b| {
-            let steps = budget.steps(b);
-            let p = Mat::from_fn(n, n, |i, j| {
-                (1.0 - steps[i]) * gp[(i, j)] + steps[i] * convex[(i, j)]
-            });
-            (p, steps)
-        })
-        .collect())
+    Ok(budget)
 }

@@ -72,27 +72,35 @@ pub(crate) fn convex_weights(
 /// remove before the weights are moved: 0.05%.
 pub const CLAMP_BUDGET: f64 = 5e-4;
 
-/// Per predicted material and each of [`STEPS`]: the cosine-weighted
-/// reflectance of the blend (absolute values) and the part the clamp removes.
+/// Per band of the table, predicted material and each of [`STEPS`]: the
+/// cosine-weighted reflectance of the blend (absolute values) and the part
+/// the clamp removes. One band is the whole table.
 #[derive(Clone)]
 pub(crate) struct Budget {
+    n: usize,
     total: Vec<[f64; STEPS.len()]>,
     clamped: Vec<[f64; STEPS.len()]>,
 }
 
 impl Budget {
-    pub(crate) fn new(n: usize) -> Budget {
+    /// `n` materials in `bands` bands.
+    pub(crate) fn new(n: usize, bands: usize) -> Budget {
         Budget {
-            total: vec![[0.0; STEPS.len()]; n],
-            clamped: vec![[0.0; STEPS.len()]; n],
+            n,
+            total: vec![[0.0; STEPS.len()]; n * bands],
+            clamped: vec![[0.0; STEPS.len()]; n * bands],
         }
     }
 
-    /// Add one row: `g[i]`, `c[i]` are the GP and convex values of material
-    /// `i` in transformed space (mean included), `form` the row's inverse
-    /// transform, `cos` its `cos_i cos_o`.
+    /// Add one row of band `band`: `g[i]`, `c[i]` are the GP and convex
+    /// values of material `i` in transformed space (mean included), `form`
+    /// the row's inverse transform, `cos` its `cos_i cos_o`.
     #[inline]
-    pub(crate) fn add(&mut self, g: &[f64], c: &[f64], form: InverseForm, cos: f64) {
+    pub(crate) fn add(&mut self, band: usize, g: &[f64], c: &[f64], form: InverseForm, cos: f64) {
+        let (total, clamped) = (
+            &mut self.total[band * self.n..(band + 1) * self.n],
+            &mut self.clamped[band * self.n..(band + 1) * self.n],
+        );
         // `e^t - 1` through the vectorisable exp: its cancellation near
         // t = 0 costs absolute error about 1e-16 s, far below any budget.
         let f = |t: f64| match form {
@@ -102,8 +110,8 @@ impl Budget {
         for i in 0..g.len() {
             for (k, t) in STEPS.iter().enumerate() {
                 let v = f(g[i] + t * (c[i] - g[i]));
-                self.total[i][k] += v.abs() * cos;
-                self.clamped[i][k] += (-v).max(0.0) * cos;
+                total[i][k] += v.abs() * cos;
+                clamped[i][k] += (-v).max(0.0) * cos;
             }
         }
     }
@@ -118,7 +126,8 @@ impl Budget {
         }
     }
 
-    /// The step each material takes under `budget` (a share of reflectance).
+    /// The step each material takes in each band under `budget` (a share
+    /// of the band's reflectance), band by band.
     pub(crate) fn steps(&self, budget: f64) -> Vec<f64> {
         (0..self.total.len())
             .map(|i| {

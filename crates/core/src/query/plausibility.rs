@@ -154,18 +154,18 @@ impl Model {
                     let len = CHUNK.min(rows - r0);
                     gp.transformed_rows(r0, &mut tg[..len]);
                     convex.transformed_rows(r0, &mut tc[..len]);
-                    let mut budget = Budget::new(1);
+                    let mut budget = Budget::new(1, 1);
                     for j in 0..len {
                         let row = r0 + j;
                         if let Some(form) = counted(store, self.transform(), row) {
-                            budget.add(&tg[j..=j], &tc[j..=j], form, cosines[row % bins]);
+                            budget.add(0, &tg[j..=j], &tc[j..=j], form, cosines[row % bins]);
                         }
                     }
                     budget
                 },
             )
             .collect();
-        let mut budget = Budget::new(1);
+        let mut budget = Budget::new(1, 1);
         for p in &parts {
             budget.merge(p);
         }
