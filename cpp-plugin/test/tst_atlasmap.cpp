@@ -6,7 +6,8 @@
 // states the material's plausibility: the numbers of
 // brdf_atlas_model_plausibility called directly at the same point, in red
 // where the library says the material is not plausible, greyed once the
-// marker moves on. Grabs the widget to a PNG.
+// marker moves on. Grabs the widget to a PNG, and again squeezed to its
+// minimum size, where every text must still show whole.
 // Every way a model fails to open is shown in the panel, naming the file.
 // Zoomed far out, the map fades where the model knows little, by the
 // library's rule, and a click there says so in the status line.
@@ -20,6 +21,7 @@
 #include <QDir>
 #include <QFile>
 #include <QLabel>
+#include <QLayout>
 #include <QProgressBar>
 #include <QPushButton>
 #include <QSignalSpy>
@@ -375,8 +377,47 @@ private slots:
         QTRY_VERIFY_WITH_TIMEOUT(done.count() + failed.count() > 0, 120000);
         QVERIFY2(failed.isEmpty(), failed.isEmpty() ? "" : qPrintable(failed.first().first().toString()));
         checkPlausibilityShown(panel_);
-        QVERIFY2(panel_->plausibilityLabel()->text().startsWith("Not plausible: "),
-                 qPrintable(panel_->plausibilityLabel()->text()));
+        QLabel *label = panel_->plausibilityLabel();
+        QVERIFY2(label->text().startsWith("Not plausible: "), qPrintable(label->text()));
+        // Squeezed to its minimum size, the panel still shows every text
+        // whole: each label as tall as its wrapped text, no two widgets
+        // overlapping. A screenshot of that beside the first.
+        const QSize size = panel_->size();
+        panel_->resize(1, 1);  // a window stops at its minimum size
+        // The labels' minimum heights follow the narrower width, the layout's
+        // minimum follows them, and the window that: wait until it settles.
+        auto settled = [this] {
+            const QSize min = panel_->layout()->totalMinimumSize();
+            return panel_->minimumSize() == min && panel_->size() == min;
+        };
+        QTRY_VERIFY_WITH_TIMEOUT(settled(), 10000);
+        const QString path =
+            QDir(qEnvironmentVariable("BRDF_ATLAS_ARTEFACTS", ".")).filePath("atlas-widget-minimum.png");
+        QVERIFY(panel_->grab().toImage().save(path));
+        qInfo("screenshot at the minimum size: %s", qPrintable(path));
+        QList<QWidget *> shown;
+        for (QWidget *w : panel_->findChildren<QWidget *>(QString(), Qt::FindDirectChildrenOnly)) {
+            if (w->isVisibleTo(panel_)) shown << w;
+        }
+        auto where = [](const QWidget *w) {
+            const QRect g = w->geometry();
+            return QStringLiteral("%1 at %2,%3 %4x%5")
+                .arg(w->metaObject()->className())
+                .arg(g.x()).arg(g.y()).arg(g.width()).arg(g.height());
+        };
+        for (QWidget *w : shown) {
+            QVERIFY2(panel_->rect().contains(w->geometry()),
+                     qPrintable(where(w) + QStringLiteral(" in %1x%2").arg(panel_->width()).arg(panel_->height())));
+            if (auto *l = qobject_cast<QLabel *>(w)) {
+                QVERIFY2(l->height() >= l->heightForWidth(l->width()), qPrintable(l->text()));
+            }
+            for (QWidget *o : shown) {
+                QVERIFY2(w == o || !w->geometry().intersects(o->geometry()),
+                         qPrintable(where(w) + " and " + where(o)));
+            }
+        }
+        panel_->resize(size);
+        waitForMap();
     }
 
     void saveWritesWhatTheLibraryWrites() {

@@ -455,8 +455,6 @@ AtlasPanel::AtlasPanel(QWidget *parent)
     layout->addWidget(view_, 1);
     coords_->setTextInteractionFlags(Qt::TextSelectableByMouse);
     coords_->setWordWrap(true);
-    // Two lines from the start, so the buttons below do not move on a click.
-    coords_->setMinimumHeight(2 * coords_->fontMetrics().lineSpacing());
     layout->addWidget(coords_);
     auto *buttons = new QHBoxLayout;
     validate_->setToolTip(QStringLiteral("Reconstruct the material at the marker"));
@@ -466,8 +464,6 @@ AtlasPanel::AtlasPanel(QWidget *parent)
     layout->addLayout(buttons);
     plausibility_->setWordWrap(true);
     plausibility_->setTextInteractionFlags(Qt::TextSelectableByMouse);
-    // Two lines too, so that what is below does not move on a Validate.
-    plausibility_->setMinimumHeight(2 * plausibility_->fontMetrics().lineSpacing());
     plausibility_->setToolTip(
         QStringLiteral("How physical the validated material is: the share of its reflectance that "
                        "came out negative and was clamped to 0 (at most 1% is plausible), and its "
@@ -583,6 +579,19 @@ void AtlasPanel::showPlausibility() {
     } else {
         plausibility_->setText(QStringLiteral("Plausibility: Validate checks the material at the marker."));
     }
+}
+
+bool AtlasPanel::event(QEvent *e) {
+    // A new text (a layout request) or a new width changes how many lines a
+    // label wraps to. The coordinates and the plausibility keep two lines
+    // from the start, so the buttons do not move on a click, nor what is
+    // below them on a Validate.
+    if (e->type() == QEvent::LayoutRequest || e->type() == QEvent::Resize) {
+        const int width = std::max(1, contentsRect().width());
+        for (QLabel *l : {title_, status_}) atlasFitLabel(l, width, 1);
+        for (QLabel *l : {coords_, plausibility_}) atlasFitLabel(l, width, 2);
+    }
+    return QWidget::event(e);
 }
 
 void AtlasPanel::updateCoordinates() {

@@ -223,6 +223,13 @@ signals:
     void reconstructed(const AtlasReconstruction &r);
     void failed(const QString &message);
 
+protected:
+    /// Keeps the word-wrapped labels as tall as their texts at the panel's
+    /// width, so that the layout's minimum height counts every line and a
+    /// panel squeezed to its minimum (a splitter, a small window) cuts no
+    /// text off.
+    bool event(QEvent *e) override;
+
 private:
     void updateCoordinates();
     /// Say in the status line whether the model knows much at the marker.

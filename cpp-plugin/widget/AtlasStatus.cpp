@@ -2,6 +2,9 @@
 #include "AtlasStatus.h"
 
 #include <QChar>
+#include <QLabel>
+
+#include <algorithm>
 
 namespace {
 
@@ -82,3 +85,10 @@ QString atlasPlausibilityStyle(const brdf_atlas::Plausibility &p) {
 }
 
 QString atlasErrorStyle() { return QStringLiteral("color: #c03030"); }
+
+void atlasFitLabel(QLabel *label, int width, int minLines) {
+    // setMinimumHeight with the height it has is a no-op: no new layout
+    // request, so fitting on every layout request settles.
+    label->setMinimumHeight(std::max(minLines * label->fontMetrics().lineSpacing(),
+                                     label->heightForWidth(std::max(1, width))));
+}

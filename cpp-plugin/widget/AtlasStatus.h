@@ -1,6 +1,7 @@
 // AtlasStatus.h: what the brdf-atlas panel says about a latent point, in
 // words for an artist: whether the model knows much there, and how physical
-// the material reconstructed there is (brdf_atlas_model_plausibility).
+// the material reconstructed there is (brdf_atlas_model_plausibility); and
+// how a label of such words fits the panel.
 //
 // Plain functions of the library's numbers, kept apart from the widgets so
 // that a test can put the same numbers into the same words.
@@ -8,6 +9,8 @@
 #define BRDF_ATLAS_STATUS_H
 
 #include <QString>
+
+class QLabel;
 
 #include "brdf_atlas.hpp"
 
@@ -33,5 +36,10 @@ QString atlasPlausibilityStyle(const brdf_atlas::Plausibility &p);
 
 /// The style sheet of the panel's error texts.
 QString atlasErrorStyle();
+
+/// Give the word-wrapped `label` a minimum height of its text wrapped at
+/// `width` pixels, and of at least `minLines` lines: a layout then never
+/// squeezes it below what its text needs at that width.
+void atlasFitLabel(QLabel *label, int width, int minLines);
 
 #endif  // BRDF_ATLAS_STATUS_H
