@@ -107,7 +107,7 @@ PY
 
 dest=$src/brdf-atlas
 mkdir -p "$dest"
-cp "$here"/widget/AtlasMapWidget.{h,cpp} "$here"/brdf-explorer/*.{h,cpp,pri} "$root"/include/brdf_atlas.{h,hpp} "$dest"/
+cp "$here"/widget/*.{h,cpp} "$here"/brdf-explorer/*.{h,cpp,pri} "$root"/include/brdf_atlas.{h,hpp} "$dest"/
 printf '# Written by cpp-plugin/apply.sh: where libbrdf_atlas_c.so is.\nBRDF_ATLAS_LIBDIR = %s\n' "$libdir" > "$dest/brdf-atlas-paths.pri"
 echo "apply.sh: plugin files in $dest (library from $libdir)"
 if [ ! -s "$build/src/data/sphere.obj" ]; then

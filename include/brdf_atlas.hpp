@@ -15,6 +15,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -55,6 +56,7 @@ inline std::string version() { return brdf_atlas_version(); }
 using View = BrdfAtlasView;
 using Dims = BrdfAtlasDims;
 using Location = BrdfAtlasLocation;
+using Plausibility = BrdfAtlasPlausibility;
 using Vec3 = std::array<double, 3>;
 static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 arrays must be packed doubles");
 
@@ -215,6 +217,16 @@ public:
         double v = 0;
         check(brdf_atlas_model_confidence(handle_, x, y, &v, nullptr));
         return v;
+    }
+
+    /// How physical the material at (x, y) is under blend rule `blend`
+    /// (BRDF_ATLAS_BLEND_GP: the table reconstruct() gives) and what the
+    /// model knows there. Reads the whole store once, as reconstruct() does.
+    Plausibility plausibility(double x, double y,
+                              std::int32_t blend = BRDF_ATLAS_BLEND_GP) const {
+        Plausibility p{};
+        check(brdf_atlas_model_plausibility(handle_, x, y, blend, &p));
+        return p;
     }
 
     /// Where the MERL file at `merl_path` lands.

@@ -7,12 +7,14 @@ QT += concurrent
 INCLUDEPATH += $$PWD
 HEADERS += \
     $$PWD/AtlasMapWidget.h \
+    $$PWD/AtlasStatus.h \
     $$PWD/AtlasGlue.h \
     $$PWD/BRDFReconstructed.h \
     $$PWD/brdf_atlas.h \
     $$PWD/brdf_atlas.hpp
 SOURCES += \
     $$PWD/AtlasMapWidget.cpp \
+    $$PWD/AtlasStatus.cpp \
     $$PWD/AtlasGlue.cpp \
     $$PWD/BRDFReconstructed.cpp
 CONFIG += c++17

@@ -2,7 +2,12 @@
 // reference point, zoom with the wheel, drag, click, press Validate, wait
 // for the reconstruction off the GUI thread, and check the table against
 // the C library called directly (bit for bit), then save it and compare
-// with the library's own writer byte for byte. Grabs the widget to a PNG.
+// with the library's own writer byte for byte. Under Validate the panel
+// states the material's plausibility: the numbers of
+// brdf_atlas_model_plausibility called directly at the same point, in red
+// where the library says the material is not plausible, greyed once the
+// marker moves on. Grabs the widget to a PNG, and again squeezed to its
+// minimum size, where every text must still show whole.
 // Every way a model fails to open is shown in the panel, naming the file.
 // Zoomed far out, the map fades where the model knows little, by the
 // library's rule, and a click there says so in the status line.
@@ -16,6 +21,7 @@
 #include <QDir>
 #include <QFile>
 #include <QLabel>
+#include <QLayout>
 #include <QProgressBar>
 #include <QPushButton>
 #include <QSignalSpy>
@@ -27,6 +33,7 @@
 #include <cstring>
 
 #include "AtlasMapWidget.h"
+#include "AtlasStatus.h"
 
 namespace {
 
@@ -52,6 +59,20 @@ QByteArray readAll(const QString &path) {
     QFile f(path);
     if (!f.open(QIODevice::ReadOnly)) qFatal("cannot read %s", qPrintable(path));
     return f.readAll();
+}
+
+// The C library's plausibility at (x, y), through a handle of its own.
+BrdfAtlasPlausibility referencePlausibility(const QString &model, double x, double y) {
+    BrdfAtlasModel *h = nullptr;
+    if (brdf_atlas_model_open(model.toUtf8().constData(), &h) != BRDF_ATLAS_STATUS_OK) {
+        qFatal("brdf_atlas_model_open: %s", brdf_atlas_last_error_message());
+    }
+    BrdfAtlasPlausibility p{};
+    if (brdf_atlas_model_plausibility(h, x, y, BRDF_ATLAS_BLEND_GP, &p) != BRDF_ATLAS_STATUS_OK) {
+        qFatal("brdf_atlas_model_plausibility: %s", brdf_atlas_last_error_message());
+    }
+    brdf_atlas_model_free(h);
+    return p;
 }
 
 // Rewrite `path` in place (the same file truncated, then written), as `cp`
@@ -85,6 +106,36 @@ private:
     AtlasPanel *panel_ = nullptr;
     AtlasMapView *view_ = nullptr;
 
+    // The panel's plausibility line states what the library says at the
+    // marker: the same numbers, the verdict and its colour, low confidence.
+    void checkPlausibilityShown(AtlasPanel *panel) {
+        const QPointF m = panel->mapView()->marker();
+        const BrdfAtlasPlausibility want = referencePlausibility(modelPath_, m.x(), m.y());
+        const AtlasReconstruction &r = panel->lastReconstruction();
+        QCOMPARE(r.x, m.x());
+        QCOMPARE(r.y, m.y());
+        // The numbers handed out with the table are the library's, bit for bit.
+        QVERIFY(std::memcmp(&r.plausibility, &want, sizeof want) == 0);
+        const QLabel *label = panel->plausibilityLabel();
+        const QString text = label->text();
+        qInfo("plausibility at (%g, %g): %s", m.x(), m.y(), qPrintable(text));
+        QVERIFY(label->isVisibleTo(panel) && label->isEnabled());
+        QCOMPARE(text, atlasPlausibilityText(want));
+        const QString share =
+            want.clamped_reflectance > 0 ? atlasPercentText(want.clamped_reflectance) : QStringLiteral("none");
+        QVERIFY2(text.contains(share + " of the reflectance") &&
+                     text.contains(QString::number(want.max_albedo_incidence, 'f', 0) + QChar(0x00B0)),
+                 qPrintable(text));
+        QVERIFY2(text.contains(QString::number(want.max_albedo, 'f', 2)) ||
+                     text.contains(QString::number(want.max_albedo, 'g', 6)),
+                 qPrintable(text));
+        QCOMPARE(text.startsWith("Plausible: "), want.plausible != 0);
+        QCOMPARE(text.startsWith("Not plausible: "), want.plausible == 0);
+        QCOMPARE(label->styleSheet().contains("c03030"), want.plausible == 0);
+        QCOMPARE(text.contains("knows little here"), want.low_confidence != 0);
+        if (want.low_confidence) QVERIFY(text.contains(QString::number(want.variance, 'f', 2)));
+    }
+
     // Wait for the map of the window shown now (layouts settled first).
     void waitForMap() {
         auto current = [this] {
@@ -103,7 +154,9 @@ private slots:
         QVERIFY2(!modelPath_.isEmpty(), "set BRDF_ATLAS_TEST_MODEL to a 2-D brdf-atlas model file");
         panel_ = new AtlasPanel;
         view_ = panel_->mapView();
-        panel_->resize(360, 460);
+        // Tall enough that the marker between the first two materials stays
+        // in view once the texts under the map have wrapped.
+        panel_->resize(360, 500);
         panel_->show();
         QVERIFY(QTest::qWaitForWindowExposed(panel_));
         QSignalSpy opened(panel_, &AtlasPanel::modelOpened);
@@ -210,6 +263,9 @@ private slots:
         // loop from a worker thread, and the busy indicator shows meanwhile.
         QCOMPARE(done.count(), 0);
         QVERIFY(panel_->busy());
+        // The plausibility comes with the table, from the same worker.
+        QVERIFY(!panel_->plausibilityLabel()->isEnabled());
+        QVERIFY(panel_->plausibilityLabel()->text().contains("checking"));
         QVERIFY(panel_->progressBar()->isVisibleTo(panel_));
         QVERIFY(!panel_->validateButton()->isEnabled());
         QTRY_VERIFY_WITH_TIMEOUT(done.count() + failed.count() > 0, 120000);
@@ -231,6 +287,42 @@ private slots:
         QVERIFY(positive > int(want.size() / 4));
     }
 
+    void plausibilityIsShownUnderValidate() {
+        const QString error = validateBetweenMaterials(panel_);
+        QVERIFY2(error.isEmpty(), qPrintable(error));
+        checkPlausibilityShown(panel_);
+    }
+
+    void plausibilityWording() {
+        // The words for numbers made up to reach each branch (the library's
+        // own numbers are checked against the panel below and above).
+        QCOMPARE(atlasPercentText(0), QStringLiteral("0%"));
+        QCOMPARE(atlasPercentText(2e-7), QStringLiteral("under 0.001%"));
+        QCOMPARE(atlasPercentText(2.3e-5), QStringLiteral("0.0023%"));
+        QCOMPARE(atlasPercentText(0.031), QStringLiteral("3.1%"));
+        QCOMPARE(atlasPercentText(0.254), QStringLiteral("25%"));
+        // clamped_reflectance, clamped_values, max_albedo, max_albedo_incidence,
+        // variance, weight_sum, plausible, low_confidence
+        const BrdfAtlasPlausibility fine{2.3e-5, 1e-3, 0.834, 60, 0.01, 1.0, 1, 0};
+        QCOMPARE(atlasPlausibilityText(fine),
+                 QString("Plausible: 0.0023% of the reflectance clamped, largest albedo 0.83 (at 60") +
+                     QChar(0x00B0) + ").");
+        QVERIFY(atlasPlausibilityStyle(fine).isEmpty());
+        const BrdfAtlasPlausibility negative{0.031, 0.2, 0.9, 80, 0.7, 0.4, 0, 1};
+        QString text = atlasPlausibilityText(negative);
+        QVERIFY2(text.startsWith("Not plausible: 3.1% of the reflectance is negative (clamped to 0); "
+                                 "largest albedo 0.90 (at 80") &&
+                     text.endsWith(" The model knows little here (variance 0.70 of 1)."),
+                 qPrintable(text));
+        QVERIFY(atlasPlausibilityStyle(negative).contains("c03030"));
+        // Just above 1: as many digits as it takes not to read as 1.00.
+        const BrdfAtlasPlausibility bright{0, 0, 1.004, 88, 0.1, 1.0, 0, 0};
+        text = atlasPlausibilityText(bright);
+        QVERIFY2(text.startsWith("Not plausible: largest albedo 1.004 at 88") &&
+                     text.endsWith(", above 1 (more light out than in); none of the reflectance clamped to 0."),
+                 qPrintable(text));
+    }
+
     void screenshot() {
         const QString dir = qEnvironmentVariable("BRDF_ATLAS_ARTEFACTS", ".");
         QDir().mkpath(dir);
@@ -240,6 +332,92 @@ private slots:
         QVERIFY(shot.save(path));
         QVERIFY(QImage(path).size() == shot.size());
         qInfo("screenshot: %s", qPrintable(path));
+    }
+
+    void plausibilityIsGreyedElsewhere() {
+        const QPointF validated = view_->marker();
+        const QString text = panel_->plausibilityLabel()->text();
+        // The marker elsewhere: the line no longer speaks of that material.
+        QTest::mouseClick(view_, Qt::LeftButton, Qt::NoModifier,
+                          view_->latentToWidget(view_->materialPoints()[2]).toPoint());
+        QVERIFY(view_->marker() != validated);
+        QVERIFY(!panel_->plausibilityLabel()->isEnabled());
+        QVERIFY2(!panel_->plausibilityLabel()->text().contains("lausible:"),
+                 qPrintable(panel_->plausibilityLabel()->text()));
+        QVERIFY(panel_->plausibilityLabel()->styleSheet().isEmpty());
+        // Back on the validated point: its verdict again.
+        view_->setMarker(validated);
+        QVERIFY(panel_->plausibilityLabel()->isEnabled());
+        QCOMPARE(panel_->plausibilityLabel()->text(), text);
+    }
+
+    void implausibleMaterialIsSaidInRed() {
+        // The first point of a grid over the model's default view, widened
+        // twice, where the library says the GP's material is not plausible
+        // (mixed-sign weights between unlike materials, or far from them).
+        brdf_atlas::Model m(modelPath_.toStdString());
+        const brdf_atlas::View v = m.view();
+        const double cx = (v.x0 + v.x1) / 2, cy = (v.y0 + v.y1) / 2;
+        const double hw = v.x1 - v.x0, hh = v.y1 - v.y0;
+        const int steps = 8;
+        bool found = false;
+        QPointF at;
+        for (int j = 0; j <= steps && !found; ++j) {
+            for (int i = 0; i <= steps && !found; ++i) {
+                at = QPointF(cx - hw + 2 * hw * i / steps, cy - hh + 2 * hh * j / steps);
+                found = m.plausibility(at.x(), at.y()).plausible == 0;
+            }
+        }
+        if (!found) QSKIP("the library finds every material of the grid plausible on this model");
+        view_->setMarker(at);
+        QVERIFY(!panel_->plausibilityLabel()->isEnabled());
+        QSignalSpy done(panel_, &AtlasPanel::reconstructed);
+        QSignalSpy failed(panel_, &AtlasPanel::failed);
+        QTest::mouseClick(panel_->validateButton(), Qt::LeftButton);
+        QTRY_VERIFY_WITH_TIMEOUT(done.count() + failed.count() > 0, 120000);
+        QVERIFY2(failed.isEmpty(), failed.isEmpty() ? "" : qPrintable(failed.first().first().toString()));
+        checkPlausibilityShown(panel_);
+        QLabel *label = panel_->plausibilityLabel();
+        QVERIFY2(label->text().startsWith("Not plausible: "), qPrintable(label->text()));
+        // Squeezed to its minimum size, the panel still shows every text
+        // whole: each label as tall as its wrapped text, no two widgets
+        // overlapping. A screenshot of that beside the first.
+        const QSize size = panel_->size();
+        panel_->resize(1, 1);  // a window stops at its minimum size
+        // The labels' minimum heights follow the narrower width, the layout's
+        // minimum follows them, and the window that: wait until it settles.
+        auto settled = [this] {
+            const QSize min = panel_->layout()->totalMinimumSize();
+            return panel_->minimumSize() == min && panel_->size() == min;
+        };
+        QTRY_VERIFY_WITH_TIMEOUT(settled(), 10000);
+        const QString path =
+            QDir(qEnvironmentVariable("BRDF_ATLAS_ARTEFACTS", ".")).filePath("atlas-widget-minimum.png");
+        QVERIFY(panel_->grab().toImage().save(path));
+        qInfo("screenshot at the minimum size: %s", qPrintable(path));
+        QList<QWidget *> shown;
+        for (QWidget *w : panel_->findChildren<QWidget *>(QString(), Qt::FindDirectChildrenOnly)) {
+            if (w->isVisibleTo(panel_)) shown << w;
+        }
+        auto where = [](const QWidget *w) {
+            const QRect g = w->geometry();
+            return QStringLiteral("%1 at %2,%3 %4x%5")
+                .arg(w->metaObject()->className())
+                .arg(g.x()).arg(g.y()).arg(g.width()).arg(g.height());
+        };
+        for (QWidget *w : shown) {
+            QVERIFY2(panel_->rect().contains(w->geometry()),
+                     qPrintable(where(w) + QStringLiteral(" in %1x%2").arg(panel_->width()).arg(panel_->height())));
+            if (auto *l = qobject_cast<QLabel *>(w)) {
+                QVERIFY2(l->height() >= l->heightForWidth(l->width()), qPrintable(l->text()));
+            }
+            for (QWidget *o : shown) {
+                QVERIFY2(w == o || !w->geometry().intersects(o->geometry()),
+                         qPrintable(where(w) + " and " + where(o)));
+            }
+        }
+        panel_->resize(size);
+        waitForMap();
     }
 
     void saveWritesWhatTheLibraryWrites() {

@@ -1,5 +1,6 @@
 // AtlasMapWidget.cpp: see AtlasMapWidget.h.
 #include "AtlasMapWidget.h"
+#include "AtlasStatus.h"
 
 #include <QFileDialog>
 #include <QFileInfo>
@@ -437,6 +438,7 @@ AtlasPanel::AtlasPanel(QWidget *parent)
       coords_(new QLabel),
       validate_(new QPushButton(QStringLiteral("Validate"))),
       save_(new QPushButton(QStringLiteral("Save .binary..."))),
+      plausibility_(new QLabel),
       progress_(new QProgressBar),
       status_(new QLabel),
       openWatcher_(new QFutureWatcher<Opened>(this)),
@@ -447,14 +449,12 @@ AtlasPanel::AtlasPanel(QWidget *parent)
     layout->setContentsMargins(0, 0, 0, 0);
     title_->setWordWrap(true);
     // Long texts wrap rather than widen the panel (BRDF Explorer's is 300 px).
-    for (QLabel *l : {title_, coords_, status_}) l->setMinimumWidth(1);
+    for (QLabel *l : {title_, coords_, plausibility_, status_}) l->setMinimumWidth(1);
     title_->setText(QStringLiteral("brdf-atlas: no model open"));
     layout->addWidget(title_);
     layout->addWidget(view_, 1);
     coords_->setTextInteractionFlags(Qt::TextSelectableByMouse);
     coords_->setWordWrap(true);
-    // Two lines from the start, so the buttons below do not move on a click.
-    coords_->setMinimumHeight(2 * coords_->fontMetrics().lineSpacing());
     layout->addWidget(coords_);
     auto *buttons = new QHBoxLayout;
     validate_->setToolTip(QStringLiteral("Reconstruct the material at the marker"));
@@ -462,6 +462,13 @@ AtlasPanel::AtlasPanel(QWidget *parent)
     buttons->addWidget(validate_);
     buttons->addWidget(save_);
     layout->addLayout(buttons);
+    plausibility_->setWordWrap(true);
+    plausibility_->setTextInteractionFlags(Qt::TextSelectableByMouse);
+    plausibility_->setToolTip(
+        QStringLiteral("How physical the validated material is: the share of its reflectance that "
+                       "came out negative and was clamped to 0 (at most 1% is plausible), and its "
+                       "largest directional albedo (at most 1: no more light out than in)"));
+    layout->addWidget(plausibility_);
     progress_->setRange(0, 0);  // busy indicator: the library reports no fraction
     progress_->setTextVisible(true);
     progress_->setVisible(false);
@@ -471,10 +478,12 @@ AtlasPanel::AtlasPanel(QWidget *parent)
     validate_->setEnabled(false);
     save_->setEnabled(false);
     updateCoordinates();
+    showPlausibility();
 
     connect(view_, &AtlasMapView::markerChanged, this, [this] {
         updateCoordinates();
         sayConfidence();
+        showPlausibility();
     });
     connect(validate_, &QPushButton::clicked, this, &AtlasPanel::validatePoint);
     connect(save_, &QPushButton::clicked, this, &AtlasPanel::saveDialog);
@@ -494,6 +503,7 @@ AtlasPanel::AtlasPanel(QWidget *parent)
                             .arg(view_->materialNames().size()));
         status_->setText(QStringLiteral("Click the map, then Validate."));
         updateCoordinates();
+        showPlausibility();
         emit modelOpened(o.path);
     });
     connect(buildWatcher_, &QFutureWatcher<Built>::finished, this, [this] {
@@ -501,10 +511,12 @@ AtlasPanel::AtlasPanel(QWidget *parent)
         const double seconds = clock_.elapsed() / 1000.0;
         setBusy(false, QString());
         if (!b.error.isEmpty()) {
+            showPlausibility();
             fail(b.error);
             return;
         }
         last_ = b.r;
+        showPlausibility();
         save_->setEnabled(true);
         status_->setStyleSheet(QString());
         status_->setText(QStringLiteral("%1: reconstructed in %2 s").arg(b.r.name).arg(seconds, 0, 'f', 2));
@@ -530,7 +542,7 @@ void AtlasPanel::setBusy(bool busy, const QString &what) {
 }
 
 void AtlasPanel::fail(const QString &message) {
-    status_->setStyleSheet(QStringLiteral("color: #c03030"));
+    status_->setStyleSheet(atlasErrorStyle());
     status_->setText(message);
     emit failed(message);
 }
@@ -543,16 +555,43 @@ void AtlasPanel::sayConfidence() {
         const double v = model->variance(m.x(), m.y());  // no pass over the store
         status_->setStyleSheet(QString());
         if (v > BRDF_ATLAS_LOW_CONFIDENCE_VARIANCE) {
-            status_->setText(
-                QStringLiteral("The model knows little here (predictive variance %1 of 1): the "
-                               "material is mostly the database's mean, faded on the map.")
-                    .arg(v, 0, 'f', 2));
+            status_->setText(atlasLowConfidenceText(v));
         } else {
             status_->setText(QStringLiteral("Click the map, then Validate."));
         }
     } catch (const std::exception &e) {
         fail(errorText(e));
     }
+}
+
+void AtlasPanel::showPlausibility() {
+    const QPointF m = view_->marker();
+    const bool validated = view_->model() && view_->hasMarker() && last_.table &&
+                           last_.modelPath == modelPath_ && last_.x == m.x() && last_.y == m.y();
+    plausibility_->setEnabled(validated);  // greyed: not about the marker
+    plausibility_->setStyleSheet(validated ? atlasPlausibilityStyle(last_.plausibility) : QString());
+    if (validated) {
+        plausibility_->setText(atlasPlausibilityText(last_.plausibility));
+    } else if (!view_->model()) {
+        plausibility_->clear();
+    } else if (buildWatcher_->isRunning()) {
+        plausibility_->setText(QStringLiteral("Plausibility: checking..."));
+    } else {
+        plausibility_->setText(QStringLiteral("Plausibility: Validate checks the material at the marker."));
+    }
+}
+
+bool AtlasPanel::event(QEvent *e) {
+    // A new text (a layout request) or a new width changes how many lines a
+    // label wraps to. The coordinates and the plausibility keep two lines
+    // from the start, so the buttons do not move on a click, nor what is
+    // below them on a Validate.
+    if (e->type() == QEvent::LayoutRequest || e->type() == QEvent::Resize) {
+        const int width = std::max(1, contentsRect().width());
+        for (QLabel *l : {title_, status_}) atlasFitLabel(l, width, 1);
+        for (QLabel *l : {coords_, plausibility_}) atlasFitLabel(l, width, 2);
+    }
+    return QWidget::event(e);
 }
 
 void AtlasPanel::updateCoordinates() {
@@ -620,17 +659,21 @@ void AtlasPanel::validatePoint() {
     clock_.start();
     setBusy(true, QStringLiteral("reconstructing at (%1, %2)...").arg(r.x, 0, 'f', 4).arg(r.y, 0, 'f', 4));
     validate_->setEnabled(false);
+    // The plausibility pass reads the whole store again, as long as the
+    // reconstruction: it runs in the same job, off the GUI thread.
     buildWatcher_->setFuture(QtConcurrent::run([model, r]() mutable -> Built {
         Built b;
         try {
             r.dims = model->dims();
             r.table = std::make_shared<const std::vector<double>>(model->reconstruct(r.x, r.y));
+            r.plausibility = model->plausibility(r.x, r.y, BRDF_ATLAS_BLEND_GP);
             b.r = r;
         } catch (const std::exception &e) {
             b.error = errorText(e);
         }
         return b;
     }));
+    showPlausibility();
 }
 
 void AtlasPanel::saveDialog() {

@@ -6,10 +6,10 @@
 // on hover) and a marker where the user clicked; the wheel zooms about the
 // cursor, dragging pans. AtlasPanel puts the view beside the latent
 // coordinates of the marker, a "Validate" button that reconstructs the
-// material there off the GUI thread (with a busy indicator) and a "Save
-// .binary..." button. The panel emits `reconstructed` with the whole MERL
-// table; what to do with it (a BRDF in BRDF Explorer's list, a file) is the
-// host's business.
+// material there off the GUI thread (with a busy indicator) and says under
+// it how physical that material is, and a "Save .binary..." button. The
+// panel emits `reconstructed` with the whole MERL table; what to do with it
+// (a BRDF in BRDF Explorer's list, a file) is the host's business.
 //
 // Depends on Qt5Widgets, Qt5Concurrent and the brdf-atlas C library
 // (brdf_atlas.h / brdf_atlas.hpp); nothing of BRDF Explorer.
@@ -49,6 +49,9 @@ struct AtlasReconstruction {
     brdf_atlas::Dims dims{};
     /// The MERL table (3 * bins doubles, the data of a .binary file).
     std::shared_ptr<const std::vector<double>> table;
+    /// How physical the table is and what the model knows at (x, y)
+    /// (brdf_atlas_model_plausibility of the GP blend the table comes from).
+    brdf_atlas::Plausibility plausibility{};
 };
 Q_DECLARE_METATYPE(AtlasReconstruction)
 
@@ -186,6 +189,9 @@ public:
     QProgressBar *progressBar() const { return progress_; }
     QLabel *coordinatesLabel() const { return coords_; }
     QLabel *statusLabel() const { return status_; }
+    /// The plausibility of the material validated at the marker, under the
+    /// buttons; greyed while the marker is at a point not validated.
+    QLabel *plausibilityLabel() const { return plausibility_; }
 
     /// The model file shown ("" before one is open).
     QString modelPath() const { return modelPath_; }
@@ -217,10 +223,20 @@ signals:
     void reconstructed(const AtlasReconstruction &r);
     void failed(const QString &message);
 
+protected:
+    /// Keeps the word-wrapped labels as tall as their texts at the panel's
+    /// width, so that the layout's minimum height counts every line and a
+    /// panel squeezed to its minimum (a splitter, a small window) cuts no
+    /// text off.
+    bool event(QEvent *e) override;
+
 private:
     void updateCoordinates();
     /// Say in the status line whether the model knows much at the marker.
     void sayConfidence();
+    /// Show the last reconstruction's plausibility if it is the marker's,
+    /// else a greyed line saying that Validate checks it.
+    void showPlausibility();
     void setBusy(bool busy, const QString &what);
     void fail(const QString &message);
     QString nameFor(double x, double y) const;
@@ -230,6 +246,7 @@ private:
     QLabel *coords_;
     QPushButton *validate_;
     QPushButton *save_;
+    QLabel *plausibility_;
     QProgressBar *progress_;
     QLabel *status_;
     QString modelPath_;

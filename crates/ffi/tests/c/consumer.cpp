@@ -179,6 +179,20 @@ void check_model(const brdf_atlas::Model &model) {
         CHECK(same(w[i], want_w[i]), "weight " << i);
     }
 
+    // Plausibility: what the C call gives, field for field; bad calls throw.
+    BrdfAtlasPlausibility want_p{};
+    CHECK(brdf_atlas_model_plausibility(model.get(), x, y, BRDF_ATLAS_BLEND_GP, &want_p) ==
+              BRDF_ATLAS_STATUS_OK,
+          "C plausibility");
+    auto p = model.plausibility(x, y);
+    CHECK(same(p.clamped_reflectance, want_p.clamped_reflectance) &&
+              same(p.clamped_values, want_p.clamped_values) && same(p.max_albedo, want_p.max_albedo) &&
+              same(p.max_albedo_incidence, want_p.max_albedo_incidence) &&
+              same(p.variance, want_p.variance) && same(p.weight_sum, want_p.weight_sum) &&
+              p.plausible == want_p.plausible && p.low_confidence == want_p.low_confidence,
+          "plausibility");
+    EXPECT_ERROR(model.plausibility(x, y, 7), BRDF_ATLAS_STATUS_INVALID_ARGUMENT, "blend rule 7");
+
     // Maps: the default window, and another one.
     auto m = fields(one("map"), 3);
     auto map = model.albedo_map(std::size_t(m.numbers[0]), std::size_t(m.numbers[1]));

@@ -1,0 +1,94 @@
+// AtlasStatus.cpp: see AtlasStatus.h.
+#include "AtlasStatus.h"
+
+#include <QChar>
+#include <QLabel>
+
+#include <algorithm>
+
+namespace {
+
+// The bounds BrdfAtlasPlausibility::plausible checks (brdf_atlas.h): at most
+// 1% of the reflectance clamped, and no directional albedo above 1 (a
+// physical material reflects at most what it receives). Used only to say
+// why a material is not plausible; the verdict is the library's.
+constexpr double kClampLimit = 0.01;
+constexpr double kAlbedoLimit = 1.0;
+
+// An albedo with two decimals, or more where two would hide that it is
+// above the limit (1.004 is not "1.00").
+QString albedoText(double albedo) {
+    QString text = QString::number(albedo, 'f', 2);
+    if (albedo > kAlbedoLimit && text.toDouble() <= kAlbedoLimit) {
+        text = QString::number(albedo, 'g', 6);
+    }
+    return text;
+}
+
+QString degreesText(double degrees) { return QString::number(degrees, 'f', 0) + QChar(0x00B0); }
+
+// "none" reads better than "0%" at the start of a clause.
+QString clampedText(double share) {
+    return share > 0 ? atlasPercentText(share) : QStringLiteral("none");
+}
+
+}  // namespace
+
+QString atlasPercentText(double share) {
+    const double percent = 100 * share;
+    if (percent <= 0) return QStringLiteral("0%");
+    if (percent < 0.001) return QStringLiteral("under 0.001%");
+    // 'g' keeps two significant digits without an exponent from 0.001 up;
+    // from 10 up whole percents say enough.
+    return (percent < 10 ? QString::number(percent, 'g', 2) : QString::number(percent, 'f', 0)) +
+           QLatin1Char('%');
+}
+
+QString atlasLowConfidenceText(double variance) {
+    return QStringLiteral("The model knows little here (predictive variance %1 of 1): the "
+                          "material is mostly the database's mean, faded on the map.")
+        .arg(variance, 0, 'f', 2);
+}
+
+QString atlasPlausibilityText(const brdf_atlas::Plausibility &p) {
+    const QString share = clampedText(p.clamped_reflectance);
+    const QString albedo = albedoText(p.max_albedo), at = degreesText(p.max_albedo_incidence);
+    QString text;
+    if (p.plausible) {
+        text = QStringLiteral("Plausible: %1 of the reflectance clamped, largest albedo %2 (at %3).")
+                   .arg(share, albedo, at);
+    } else {
+        // What is wrong comes first; both numbers are always there.
+        const bool negative = p.clamped_reflectance > kClampLimit;
+        const bool bright = p.max_albedo > kAlbedoLimit;
+        const QString clamped =
+            (negative ? QStringLiteral("%1 of the reflectance is negative (clamped to 0)")
+                      : QStringLiteral("%1 of the reflectance clamped to 0"))
+                .arg(share);
+        const QString largest =
+            (bright ? QStringLiteral("largest albedo %1 at %2, above 1 (more light out than in)")
+                    : QStringLiteral("largest albedo %1 (at %2)"))
+                .arg(albedo, at);
+        const bool brightFirst = bright && !negative;
+        text = QStringLiteral("Not plausible: %1; %2.")
+                   .arg(brightFirst ? largest : clamped, brightFirst ? clamped : largest);
+    }
+    if (p.low_confidence) {
+        text += QStringLiteral(" The model knows little here (variance %1 of 1).")
+                    .arg(p.variance, 0, 'f', 2);
+    }
+    return text;
+}
+
+QString atlasPlausibilityStyle(const brdf_atlas::Plausibility &p) {
+    return p.plausible ? QString() : atlasErrorStyle();
+}
+
+QString atlasErrorStyle() { return QStringLiteral("color: #c03030"); }
+
+void atlasFitLabel(QLabel *label, int width, int minLines) {
+    // setMinimumHeight with the height it has is a no-op: no new layout
+    // request, so fitting on every layout request settles.
+    label->setMinimumHeight(std::max(minLines * label->fontMetrics().lineSpacing(),
+                                     label->heightForWidth(std::max(1, width))));
+}

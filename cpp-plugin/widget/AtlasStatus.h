@@ -1,0 +1,45 @@
+// AtlasStatus.h: what the brdf-atlas panel says about a latent point, in
+// words for an artist: whether the model knows much there, and how physical
+// the material reconstructed there is (brdf_atlas_model_plausibility); and
+// how a label of such words fits the panel.
+//
+// Plain functions of the library's numbers, kept apart from the widgets so
+// that a test can put the same numbers into the same words.
+#ifndef BRDF_ATLAS_STATUS_H
+#define BRDF_ATLAS_STATUS_H
+
+#include <QString>
+
+class QLabel;
+
+#include "brdf_atlas.hpp"
+
+/// A share (0..1) as a percentage for reading, not for computing: two
+/// significant digits below 10%, whole percents above, "0%" for nothing and
+/// "under 0.001%" for a trace (so that a trace never reads as none).
+QString atlasPercentText(double share);
+
+/// The status line where the model knows little (predictive variance
+/// `variance` above BRDF_ATLAS_LOW_CONFIDENCE_VARIANCE).
+QString atlasLowConfidenceText(double variance);
+
+/// One or two sentences on `p`: "Plausible: ..." or "Not plausible: ..."
+/// (by `p.plausible`, and what is wrong first) with the share of the
+/// reflectance clamped to 0 and the largest directional albedo with its
+/// incidence; where `p.low_confidence`, a sentence saying that the model
+/// knows little there, with the predictive variance.
+QString atlasPlausibilityText(const brdf_atlas::Plausibility &p);
+
+/// The colour a label shows `p` in: empty (the palette's) when plausible,
+/// the panel's error red when not.
+QString atlasPlausibilityStyle(const brdf_atlas::Plausibility &p);
+
+/// The style sheet of the panel's error texts.
+QString atlasErrorStyle();
+
+/// Give the word-wrapped `label` a minimum height of its text wrapped at
+/// `width` pixels, and of at least `minLines` lines: a layout then never
+/// squeezes it below what its text needs at that width.
+void atlasFitLabel(QLabel *label, int width, int minLines);
+
+#endif  // BRDF_ATLAS_STATUS_H
