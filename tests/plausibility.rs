@@ -24,10 +24,13 @@ fn reconstruct_json_is_the_blend_the_library_computes() {
     let tmp = tempfile::tempdir().unwrap();
     let model_path = fitted(tmp.path());
     let model = Model::open(&model_path).unwrap();
-    for (rule, at) in [
-        (BlendRule::Gp, [0.3, -0.45]),
-        (BlendRule::Plausible, [-0.95, 0.9]),
-    ] {
+    // For the plausible rule, the first point of a grid over (and beyond)
+    // the map's box where the rule moves the weights.
+    let moving = (0..81)
+        .map(|k| [-2.0 + 0.5 * (k % 9) as f64, -2.0 + 0.5 * (k / 9) as f64])
+        .find(|x| model.at_with(x, BlendRule::Plausible).unwrap().steps().is_some())
+        .expect("a point where the plausible rule moves the weights");
+    for (rule, at) in [(BlendRule::Gp, [0.3, -0.45]), (BlendRule::Plausible, moving)] {
         let out_path = tmp.path().join(format!("{}.binary", rule.name()));
         let out = brdf_atlas([
             "reconstruct".as_ref(),
@@ -53,6 +56,30 @@ fn reconstruct_json_is_the_blend_the_library_computes() {
         }
         let sum: f64 = blend.weights().iter().sum();
         assert_eq!(rec["weight_sum"].as_f64().unwrap(), sum);
+        // Where the rule moved the weights: towards what, and by how much in
+        // each theta_h bin; the weights of every bin follow from the record.
+        match blend.steps() {
+            None => assert!(rec["moved"].is_null(), "{rule:?}: {}", rec["moved"]),
+            Some((towards, steps)) => {
+                let moved = &rec["moved"];
+                let t: Vec<f64> = serde_json::from_value(moved["theta_h_steps"].clone()).unwrap();
+                assert_eq!(t, steps);
+                assert!(t.iter().any(|&t| t > 0.0), "moved nowhere");
+                for (b, &tb) in t.iter().enumerate() {
+                    for (i, name) in model.names().iter().enumerate() {
+                        let (w, v) = (
+                            weights[name].as_f64().unwrap(),
+                            moved["towards"][name].as_f64().unwrap(),
+                        );
+                        assert_eq!(v, towards[i]);
+                        assert_eq!(w + tb * (v - w), blend.weights_in(b)[i], "{name} bin {b}");
+                    }
+                }
+            }
+        }
+        if rule == BlendRule::Plausible {
+            assert!(!rec["moved"].is_null(), "the test point must move the weights");
+        }
         assert_eq!(rec["blend"], rule.name());
         assert_eq!(rec["point"], serde_json::json!(at));
         assert_eq!(rec["transform"]["name"], "log");

@@ -67,9 +67,9 @@ fn report_writes_every_file_and_fails_atomically() {
         assert_eq!((reader.info().width, reader.info().height), (720, 440));
     }
     // CSV tables: q = 1..3, two transforms, GPLVM, its L-BFGS twin, the
-    // plausible rule at q = 2 and PCA.
+    // convex blend and the plausible rule at q = 2, and PCA.
     let loo = std::fs::read_to_string(rep.join("loo.csv")).unwrap();
-    assert_eq!(loo.lines().count(), 1 + 2 * (3 + 1 + 1 + 3), "{loo}");
+    assert_eq!(loo.lines().count(), 1 + 2 * (3 + 1 + 1 + 1 + 3), "{loo}");
     for line in loo.lines().skip(1) {
         let cols: Vec<&str> = line.split(',').collect();
         for v in &cols[3..6] {
@@ -78,7 +78,7 @@ fn report_writes_every_file_and_fails_atomically() {
         }
     }
     let per = std::fs::read_to_string(rep.join("loo-materials.csv")).unwrap();
-    assert_eq!(per.lines().count(), 1 + 2 * 8 * 6);
+    assert_eq!(per.lines().count(), 1 + 2 * 9 * 6);
     // Plausibility: a 3 x 3 grid, two transforms, two rules; the plausible
     // rule never clamps more than the GP at the same point.
     assert!(md.contains("## Plausibility") && md.contains("(plausibility.png)"));

@@ -138,18 +138,30 @@ pub fn warn(model: &Model, x: &[f64], blend: &Blend<'_>) -> Result<(), Error> {
     Ok(())
 }
 
-/// The JSON record of a blend: point, weights by name, transform, plausibility, confidence.
+/// The JSON record of a blend: point, weights by name (and where the rule
+/// moved them, the weights it moved them towards and the step of each
+/// `theta_h` bin), transform, plausibility, confidence.
 pub fn record(
     model: &Model,
     rule: BlendRule,
     blend: &Blend<'_>,
 ) -> Result<serde_json::Value, Error> {
-    let weights: serde_json::Map<String, serde_json::Value> = model
-        .names()
-        .iter()
-        .zip(blend.weights())
-        .map(|(n, w)| (n.clone(), json!(w)))
-        .collect();
+    let by_name = |w: &[f64]| -> serde_json::Map<String, serde_json::Value> {
+        model
+            .names()
+            .iter()
+            .zip(w)
+            .map(|(n, w)| (n.clone(), json!(w)))
+            .collect()
+    };
+    let weights = by_name(blend.weights());
+    let moved = blend.steps().map(|(towards, steps)| {
+        json!({
+            "rule": "in theta_h bin b the weights are w + t_b (towards - w), w the weights above",
+            "towards": by_name(towards),
+            "theta_h_steps": steps,
+        })
+    });
     let transform = model.file().transform;
     let (p, c) = (blend.plausibility()?, blend.confidence());
     Ok(json!({
@@ -158,6 +170,7 @@ pub fn record(
         "blend": rule.name(),
         "weights": weights,
         "weight_sum": blend.weights().iter().sum::<f64>(),
+        "moved": moved,
         "transform": { "name": transform.name(), "formula": transform.formula() },
         "plausibility": p,
         "plausible": p.is_plausible(),

@@ -34,17 +34,24 @@ fn fit(dir: &Path, count: usize, transform: TransformKind) -> PathBuf {
 /// `(removed, total, negative values, measured values)` of weights `w`,
 /// recomputed row by row in plain f64 from the stored rows.
 fn dense_clamp(m: &Model, w: &[f64]) -> [f64; 4] {
+    dense_clamp_by(m, |_| w, None)
+}
+
+/// [`dense_clamp`] with the weights of each `theta_h` bin given by `w`,
+/// over the rows of `theta_h` bin `only` (all rows if `None`).
+fn dense_clamp_by<'a>(m: &Model, w: impl Fn(usize) -> &'a [f64], only: Option<usize>) -> [f64; 4] {
     let store = m.store();
     let (n, bins) = (store.n(), DIMS.bins());
     let kind = m.file().transform;
     let mut acc = [0.0; 4];
     let mut z = vec![0.0; n];
     for row in 0..store.rows() {
-        if store.unmeasured()[row] != 0 {
+        let theta_h = DIMS.unbin(row % bins).0;
+        if store.unmeasured()[row] != 0 || only.is_some_and(|b| b != theta_h) {
             continue;
         }
         store.copy_rows(row, &mut z);
-        let v = store.mean()[row] + w.iter().zip(&z).map(|(a, b)| a * b).sum::<f64>();
+        let v = store.mean()[row] + w(theta_h).iter().zip(&z).map(|(a, b)| a * b).sum::<f64>();
         let bin = row % bins;
         let (ci, co) = DIMS.angles_of(bin).cosines();
         let c = (ci * co).max(0.0);
@@ -136,7 +143,7 @@ fn confidence_is_the_predictive_variance() {
 }
 
 #[test]
-fn the_plausible_rule_keeps_the_clamp_within_budget_and_the_gp_where_it_already_is() {
+fn the_plausible_rule_keeps_every_theta_h_bin_within_budget_and_the_gp_where_it_already_is() {
     let tmp = tempfile::tempdir().unwrap();
     for transform in [TransformKind::Raw, TransformKind::Log] {
         let m = Model::open(fit(tmp.path(), 12, transform)).unwrap();
@@ -144,22 +151,20 @@ fn the_plausible_rule_keeps_the_clamp_within_budget_and_the_gp_where_it_already_
         for x in POINTS {
             let gp = m.at_with(&x, BlendRule::Gp).unwrap();
             let pl = m.at_with(&x, BlendRule::Plausible).unwrap();
-            let share = |w: &[f64]| {
-                let d = dense_clamp(&m, w);
-                d[0] / d[1]
+            assert_eq!(gp.weights(), pl.weights(), "the GP's weights are the base");
+            let share_in = |b: usize, w: &[f64]| {
+                let d = dense_clamp_by(&m, |_| w, Some(b));
+                if d[1] > 0.0 { d[0] / d[1] } else { 0.0 }
             };
-            let (sg, sp) = (share(gp.weights()), share(pl.weights()));
-            if sg <= CLAMP_BUDGET {
-                assert_eq!(
-                    gp.weights(),
-                    pl.weights(),
-                    "{transform:?} {x:?}: moved within budget"
-                );
+            let Some((convex, steps)) = pl.steps() else {
+                // Not moved: every bin is already within budget.
+                for b in 0..DIMS.theta_h {
+                    assert!(share_in(b, gp.weights()) <= CLAMP_BUDGET * (1.0 + 1e-9));
+                }
                 continue;
-            }
+            };
             moved += 1;
-            // The weights lie on the segment to the convex blend of the
-            // narrower kernel, at one of the steps.
+            // The convex weights of the narrower kernel, independently.
             let l = m.file().kernel.length_scale * CONVEX_LENGTH_RATIO;
             let k: Vec<f64> = (0..m.names().len())
                 .map(|i| {
@@ -170,37 +175,38 @@ fn the_plausible_rule_keeps_the_clamp_within_budget_and_the_gp_where_it_already_
                 })
                 .collect();
             let sum: f64 = k.iter().sum();
-            let convex: Vec<f64> = k.iter().map(|v| v / sum).collect();
-            let i = (0..convex.len())
-                .max_by(|&a, &b| {
-                    let d = |j: usize| (convex[j] - gp.weights()[j]).abs();
-                    d(a).total_cmp(&d(b))
-                })
-                .unwrap();
-            let t = (pl.weights()[i] - gp.weights()[i]) / (convex[i] - gp.weights()[i]);
-            assert!(
-                STEPS.iter().any(|s| (s - t).abs() < 1e-9),
-                "{x:?}: step {t}"
-            );
-            // Within budget, unless even the convex blend (t = 1) is not.
-            assert!(
-                sp <= CLAMP_BUDGET * (1.0 + 1e-9) || t == 1.0,
-                "{transform:?} {x:?}: {sg} -> {sp} at t = {t}"
-            );
-            assert!(sp < sg, "{transform:?} {x:?}");
-            // The smallest such step: the one before it is over budget.
-            let k = STEPS.iter().position(|s| (s - t).abs() < 1e-9).unwrap();
-            if k > 0 {
-                let prev: Vec<f64> = gp
-                    .weights()
-                    .iter()
-                    .zip(&convex)
-                    .map(|(w, v)| (1.0 - STEPS[k - 1]) * w + STEPS[k - 1] * v)
-                    .collect();
-                assert!(
-                    share(&prev) > CLAMP_BUDGET,
-                    "{x:?}: a smaller step was enough"
-                );
+            for (got, want) in convex.iter().zip(k.iter().map(|v| v / sum)) {
+                assert!((got - want).abs() < 1e-12, "{x:?}: convex {got} vs {want}");
+            }
+            let at = |t: f64| -> Vec<f64> {
+                gp.weights().iter().zip(convex).map(|(w, v)| w + t * (v - w)).collect()
+            };
+            assert_eq!(steps.len(), DIMS.theta_h);
+            for (b, &t) in steps.iter().enumerate() {
+                let k = STEPS.iter().position(|&s| s == t).expect("a step of STEPS");
+                assert_eq!(pl.weights_in(b), at(t).as_slice(), "{x:?} bin {b}");
+                // Within budget, unless even the convex blend (t = 1) is not.
+                let sp = share_in(b, &at(t));
+                assert!(sp <= CLAMP_BUDGET * (1.0 + 1e-9) || t == 1.0, "{x:?} bin {b}: {sp} at {t}");
+                // The smallest such step: the one before it is over budget.
+                if k > 0 {
+                    assert!(share_in(b, &at(STEPS[k - 1])) > CLAMP_BUDGET, "{x:?} bin {b}: smaller was enough");
+                }
+            }
+            // The blend's own figures and values follow the bins' weights.
+            let d = dense_clamp_by(&m, |b| pl.weights_in(b), None);
+            let p = pl.plausibility().unwrap();
+            assert!((p.clamped_reflectance - d[0] / d[1]).abs() <= 1e-9 * (d[0] / d[1]).max(1e-12));
+            let table = pl.table().unwrap();
+            for bin in (0..DIMS.bins()).step_by(97) {
+                for c in 0..3 {
+                    let (point, full) = (pl.value(c, bin), table.value(c, bin));
+                    let same = match (point, full) {
+                        (Some(a), Some(b)) => (a - b).abs() <= 1e-12 * b.abs().max(1e-300),
+                        (a, b) => a == b,
+                    };
+                    assert!(same, "{x:?} bin {bin}: point {point:?}, table {full:?}");
+                }
             }
         }
         assert!(moved > 0, "{transform:?}: no test point moved the weights");

@@ -302,39 +302,50 @@ fn per_transform(
         labels.push((method, q));
         r.fits.push(row);
         if q == 2 && optimizer == OptimizerKind::HookeJeeves {
-            kept = Some(fit);
+            kept = Some((fit, predictors.len() - 1));
         }
     }
-    if let Some(fit) = &kept {
+    // The plausible rule's held-out predictions mix the kept fit's GP
+    // predictor with the convex one, theta_h bin by theta_h bin.
+    let mut mixes = Vec::new();
+    if let Some((fit, at)) = &kept {
         steps.say(&format!(
             "{name} transform: the plausible rule's steps, held out"
         ))?;
         let (latent, kernel) = (fit.outcome.latent.as_ref(), &fit.kernel);
-        let gp = loo::gp_predictor(kernel, latent, true)?;
+        let gp = &predictors[*at];
         let convex = loo::convex_predictor(kernel, latent)?;
         let bars = Bars::new("plausible steps");
-        let mut rules = loo::plausible_predictors(
+        let mut banded = loo::banded_steps(
             &store,
             gp.as_ref(),
             convex.as_ref(),
             &[loo::CLAMP_BUDGET],
             &bars,
         )?;
-        predictors.push(rules.remove(0).0);
-        labels.push(("gplvm-plausible", 2));
+        predictors.push(convex);
+        labels.push(("convex", 2));
+        mixes.push(loo::Mix {
+            from: *at,
+            towards: predictors.len() - 1,
+            steps: banded.remove(0),
+        });
     }
     for q in 1..=plan.q_max {
         predictors.push(loo::pca_predictor(y.as_ref(), q)?);
         labels.push(("pca", q));
     }
+    if !mixes.is_empty() {
+        labels.push(("gplvm-plausible", 2));
+    }
     steps.say(&format!(
         "{name} transform: leave-one-out pass ({} predictors over {} values)",
-        predictors.len(),
+        predictors.len() + mixes.len(),
         store.rows()
     ))?;
     let bars = Bars::new("leave-one-out");
     let t = Instant::now();
-    let ev = loo::evaluate(&store, &predictors, &bars)?;
+    let ev = loo::evaluate_mixed(&store, &predictors, &mixes, &bars)?;
     r.loo_times.push((transform, predictors.len(), t.elapsed()));
     drop(bars);
     record_loo(r, transform, &labels, &ev, y.as_ref())?;
@@ -351,7 +362,7 @@ fn per_transform(
         store,
         gram,
         y,
-        kept,
+        kept: kept.map(|(fit, _)| fit),
     })
 }
 

@@ -33,9 +33,10 @@ pub fn markdown(w: &mut dyn Write, r: &Results) -> io::Result<()> {
         "![Clamped share of reflectance over the map](plausibility.png)\n\n\
          At the centres of a grid over the map's default view, each point's material \
          is reconstructed with the GP's weights (`gp`, the default) and with the \
-         plausible rule (`--blend plausible`: the GP's weights moved towards a convex \
-         blend of the materials just far enough that the clamp removes at most 0.05% of \
-         the reflectance). **Clamped**: the share of the cosine-weighted reflectance \
+         plausible rule (`--blend plausible`: in each theta_h bin of the table where \
+         the clamp would remove more than 0.05% of that bin's reflectance, the GP's \
+         weights moved towards a convex blend of the materials just far enough that it \
+         does not). **Clamped**: the share of the cosine-weighted reflectance \
          that the clamp to >= 0 removes. **Albedo**: the largest directional albedo \
          (at most 1 for a physical material). **Low confidence**: predictive variance \
          above 0.5. The picture shows the clamped share per grid cell (log scale, white \

@@ -24,7 +24,7 @@ use crate::data::transform::InverseForm;
 use crate::error::Result;
 use crate::model::Model;
 use crate::query::budget::{Budget, CLAMP_BUDGET, convex_weights, counted};
-use crate::query::reconstruct::Blend;
+use crate::query::reconstruct::{Bands, Blend};
 
 /// Rows a worker handles at once (fixed, so sums do not depend on the thread count).
 const CHUNK: usize = 4096;
@@ -43,14 +43,16 @@ pub enum BlendRule {
     /// go negative; the inverse transform then clamps it.
     #[default]
     Gp,
-    /// `w' = (1 - t) w + t v`, `v` the convex weights of a narrower kernel
-    /// ([`crate::loo::CONVEX_LENGTH_RATIO`]), with the smallest `t` of
+    /// In each `theta_h` bin `b` of the table, `w' = w + t_b (v - w)`, `v`
+    /// the convex weights of a narrower kernel
+    /// ([`crate::loo::CONVEX_LENGTH_RATIO`]), with the smallest `t_b` of
     /// [`crate::loo::STEPS`] for which the clamp removes at most
-    /// [`crate::loo::CLAMP_BUDGET`] of the blend's cosine-weighted
+    /// [`crate::loo::CLAMP_BUDGET`] of that bin's cosine-weighted
     /// reflectance: the GP's weights wherever they are plausible, and the
     /// least step along the segment to the convex blend (plausible by
-    /// construction: a convex blend of non-negative values) where they are
-    /// not. Costs one extra pass over the store per latent point.
+    /// construction: a convex blend of non-negative values) only in the
+    /// bins where they are not. Costs one extra pass over the store per
+    /// latent point.
     Plausible,
 }
 
@@ -122,27 +124,25 @@ impl Model {
             BlendRule::Plausible => {
                 let latent = crate::gplvm::kernel::rows_of(self.latent().as_ref());
                 let convex = convex_weights(&latent, x, self.file().kernel.length_scale, None);
-                let t = self.plausible_step(blend.weights(), &convex)?;
-                if t == 0.0 {
+                let steps = self.plausible_steps(blend.weights(), &convex)?;
+                if steps.iter().all(|&t| t == 0.0) {
                     return Ok(blend);
                 }
-                let w = blend
-                    .weights()
-                    .iter()
-                    .zip(&convex)
-                    .map(|(w, c)| (1.0 - t) * w + t * c)
-                    .collect();
-                Ok(blend.with_weights(w))
+                let dims = self.dims();
+                let bands = Bands::new(blend.weights(), convex, steps, dims.theta_d * dims.phi_d);
+                Ok(blend.with_bands(bands))
             }
         }
     }
 
-    /// The step of [`BlendRule::Plausible`] from weights `w` towards `v`:
-    /// one pass over the store (see [`crate::loo::STEPS`]).
-    fn plausible_step(&self, w: &[f64], v: &[f64]) -> Result<f64> {
+    /// The steps of [`BlendRule::Plausible`] from weights `w` towards `v`,
+    /// one per `theta_h` bin: one pass over the store (see
+    /// [`crate::loo::STEPS`]).
+    fn plausible_steps(&self, w: &[f64], v: &[f64]) -> Result<Vec<f64>> {
         let store = self.store();
         let rows = store.rows();
-        let bins = self.dims().bins();
+        let dims = self.dims();
+        let (bins, bands) = (dims.bins(), dims.theta_h);
         let cosines = self.cosine_products();
         let (gp, convex) = (self.at_weights(w), self.at_weights(v));
         let parts: Vec<Budget> = (0..rows.div_ceil(CHUNK))
@@ -154,23 +154,24 @@ impl Model {
                     let len = CHUNK.min(rows - r0);
                     gp.transformed_rows(r0, &mut tg[..len]);
                     convex.transformed_rows(r0, &mut tc[..len]);
-                    let mut budget = Budget::new(1, 1);
+                    let mut budget = Budget::new(1, bands);
                     for j in 0..len {
                         let row = r0 + j;
                         if let Some(form) = counted(store, self.transform(), row) {
-                            budget.add(0, &tg[j..=j], &tc[j..=j], form, cosines[row % bins]);
+                            let (bin, t) = (row % bins, (&tg[j..=j], &tc[j..=j]));
+                            budget.add(dims.unbin(bin).0, t.0, t.1, form, cosines[bin]);
                         }
                     }
                     budget
                 },
             )
             .collect();
-        let mut budget = Budget::new(1, 1);
+        let mut budget = Budget::new(1, bands);
         for p in &parts {
             budget.merge(p);
         }
         self.verify()?;
-        Ok(budget.steps(CLAMP_BUDGET)[0])
+        Ok(budget.steps(CLAMP_BUDGET))
     }
 }
 

@@ -41,10 +41,62 @@ pub struct Blend<'m> {
     kernel: Vec<f64>,
     /// The GP's weights `K^-1 k(x)`.
     gp: Vec<f64>,
-    /// The weights the blend uses: `gp`, or adapted by a [`crate::query::BlendRule`].
+    /// The weights the blend uses: `gp`, or those it was made with.
     weights: Vec<f64>,
+    /// Weights per `theta_h` bin, where a [`crate::query::BlendRule`] moved them.
+    bands: Option<Box<Bands>>,
     /// `value(channel, bin)` of every row asked so far (see [`Memo`]).
     memo: OnceLock<Box<[AtomicU64]>>,
+}
+
+/// The weights of a blend that differ from one `theta_h` bin to the next:
+/// in bin `b`, `w + t_b (v - w)` (`w` the GP's weights, `v` the convex
+/// ones), one weight vector per distinct step.
+#[derive(Debug, Clone)]
+pub(crate) struct Bands {
+    /// The convex weights `v`.
+    pub(crate) convex: Vec<f64>,
+    /// The step `t_b` of each `theta_h` bin.
+    pub(crate) steps: Vec<f64>,
+    /// Index into `sets` of each `theta_h` bin.
+    of_bin: Vec<usize>,
+    /// One weight vector per distinct step.
+    sets: Vec<Vec<f64>>,
+    /// Bins per `theta_h` bin (`theta_d x phi_d`).
+    per: usize,
+}
+
+impl Bands {
+    /// The banded weights for GP weights `w`, convex weights `v`, steps `t`
+    /// per `theta_h` bin, and `per` bins per `theta_h` bin.
+    pub(crate) fn new(w: &[f64], convex: Vec<f64>, steps: Vec<f64>, per: usize) -> Bands {
+        let mut distinct: Vec<f64> = Vec::new();
+        let of_bin = steps
+            .iter()
+            .map(|&t| {
+                distinct.iter().position(|&d| d == t).unwrap_or_else(|| {
+                    distinct.push(t);
+                    distinct.len() - 1
+                })
+            })
+            .collect();
+        let sets = distinct
+            .iter()
+            .map(|&t| w.iter().zip(&convex).map(|(w, v)| w + t * (v - w)).collect())
+            .collect();
+        Bands {
+            convex,
+            steps,
+            of_bin,
+            sets,
+            per,
+        }
+    }
+
+    /// The weights of `theta_h` bin `b`.
+    fn of(&self, b: usize) -> &[f64] {
+        &self.sets[self.of_bin[b]]
+    }
 }
 
 /// Encoding of the memo's slots: a value is stored as its bits XOR a NaN
@@ -91,6 +143,7 @@ impl Model {
             kernel,
             gp: weights.clone(),
             weights,
+            bands: None,
             memo: OnceLock::new(),
         })
     }
@@ -103,6 +156,7 @@ impl Model {
             kernel: Vec::new(),
             gp: weights.to_vec(),
             weights: weights.to_vec(),
+            bands: None,
             memo: OnceLock::new(),
         }
     }
@@ -114,10 +168,38 @@ impl<'m> Blend<'m> {
         &self.x
     }
 
-    /// The blend weights, one per input material: the GP's `K^-1 k(x)`, or
-    /// those of the [`crate::query::BlendRule`] the blend was made with.
+    /// The blend weights, one per input material: the GP's `K^-1 k(x)`.
+    /// Where a [`crate::query::BlendRule`] moved them, the weights differ
+    /// from one `theta_h` bin to the next: see [`Blend::weights_in`].
     pub fn weights(&self) -> &[f64] {
         &self.weights
+    }
+
+    /// The weights the blend uses in `theta_h` bin `theta_h` (bins beyond the
+    /// table's read as the last).
+    pub fn weights_in(&self, theta_h: usize) -> &[f64] {
+        match &self.bands {
+            Some(b) => b.of(theta_h.min(b.steps.len() - 1)),
+            None => &self.weights,
+        }
+    }
+
+    /// Where a [`crate::query::BlendRule`] moved the weights: the convex
+    /// weights `v` and the step `t_b` of each `theta_h` bin (the weights in
+    /// bin `b` are `w + t_b (v - w)`). `None` for the GP's own blend.
+    pub fn steps(&self) -> Option<(&[f64], &[f64])> {
+        self.bands
+            .as_deref()
+            .map(|b| (b.convex.as_slice(), b.steps.as_slice()))
+    }
+
+    /// The weights of store row `row`.
+    #[inline]
+    fn weights_of_row(&self, row: usize, bins: usize) -> &[f64] {
+        match &self.bands {
+            Some(b) => b.of((row % bins) / b.per),
+            None => &self.weights,
+        }
     }
 
     /// The GP's weights `K^-1 k(x)` at this point, whatever the rule.
@@ -135,10 +217,10 @@ impl<'m> Blend<'m> {
         self.model
     }
 
-    /// The same point with other weights (and a fresh memo).
-    pub(crate) fn with_weights(self, weights: Vec<f64>) -> Blend<'m> {
+    /// The same point with weights per `theta_h` bin (and a fresh memo).
+    pub(crate) fn with_bands(self, bands: Bands) -> Blend<'m> {
         Blend {
-            weights,
+            bands: Some(Box::new(bands)),
             memo: OnceLock::new(),
             ..self
         }
@@ -149,9 +231,10 @@ impl<'m> Blend<'m> {
     pub fn transformed(&self, row: usize) -> f64 {
         let store = self.model.store();
         let n = store.n();
+        let w = self.weights_of_row(row, self.model.dims().bins());
         let z = match store.z() {
-            Rows::F32(z) => dot::dot(&self.weights, &z[row * n..(row + 1) * n]),
-            Rows::F64(z) => dot::dot(&self.weights, &z[row * n..(row + 1) * n]),
+            Rows::F32(z) => dot::dot(w, &z[row * n..(row + 1) * n]),
+            Rows::F64(z) => dot::dot(w, &z[row * n..(row + 1) * n]),
         };
         store.mean()[row] + z
     }
@@ -159,10 +242,26 @@ impl<'m> Blend<'m> {
     /// [`Blend::transformed`] for rows `r0 .. r0 + out.len()`.
     pub fn transformed_rows(&self, r0: usize, out: &mut [f64]) {
         let store = self.model.store();
-        let (n, mean) = (store.n(), &store.mean()[r0..]);
-        match store.z() {
-            Rows::F32(z) => dot::rows(&self.weights, &z[r0 * n..], mean, out),
-            Rows::F64(z) => dot::rows(&self.weights, &z[r0 * n..], mean, out),
+        let n = store.n();
+        let (bins, end) = (self.model.dims().bins(), r0 + out.len());
+        let mut r = r0;
+        while r < end {
+            // One run of rows with the same weights: the rest of the table,
+            // or of the current theta_h bin.
+            let (w, run_end) = match &self.bands {
+                None => (self.weights.as_slice(), end),
+                Some(b) => {
+                    let bin = r % bins;
+                    let th = bin / b.per;
+                    (b.of(th), end.min(r - bin + (th + 1) * b.per))
+                }
+            };
+            let (mean, out) = (&store.mean()[r..], &mut out[r - r0..run_end - r0]);
+            match store.z() {
+                Rows::F32(z) => dot::rows(w, &z[r * n..], mean, out),
+                Rows::F64(z) => dot::rows(w, &z[r * n..], mean, out),
+            }
+            r = run_end;
         }
     }
 
