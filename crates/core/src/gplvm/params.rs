@@ -178,19 +178,35 @@ impl CheckedParams {
     }
 }
 
-/// Translate the latent points so that their bounding box is centred on the
-/// origin, and scale them and the length scale by one factor so that the
-/// box's larger half-width is 1.
+/// Rotate the latent points (when `q = 2`) to the angle whose bounding box
+/// has the smallest larger half-width, translate them so that the box is
+/// centred on the origin, and scale them and the length scale by one
+/// factor so that the box's larger half-width is 1.
 ///
 /// The kernel depends on `|x_i - x_j| / l` only, so the cost and every
 /// reconstruction are unchanged; what changes is that the map's default
-/// view, which frames `[-1, 1]^2`, frames the materials. A learned kernel
-/// needs this: with the length scale free, the likelihood does not care
-/// how large the configuration is, and the optimum found often fills a
-/// fraction of the box.
+/// view, which frames `[-1, 1]^2`, frames the materials as large as it can.
+/// A learned kernel needs this: with the length scale free, the likelihood
+/// does not care how large the configuration is or how it is turned, and
+/// the optimum found often fills a fraction of the box.
 fn fill_the_box(outcome: &mut Outcome) {
     let x = &mut outcome.latent;
     let (n, q) = (x.nrows(), x.ncols());
+    if q == 2 {
+        let points: Vec<[f64; 2]> = (0..n).map(|i| [x[(i, 0)], x[(i, 1)]]).collect();
+        // Quarter-degree steps over a quarter turn (a box turned by 90
+        // degrees is the same box): the first smallest wins, so the angle
+        // depends on the points only.
+        let angle = (0..360)
+            .map(|k| (k as f64 * 0.25).to_radians())
+            .map(|a| (half_width(&turn(&points, a)), a))
+            .fold((f64::INFINITY, 0.0), |best, t| if t.0 < best.0 { t } else { best })
+            .1;
+        for (i, p) in turn(&points, angle).iter().enumerate() {
+            x[(i, 0)] = p[0];
+            x[(i, 1)] = p[1];
+        }
+    }
     let mut half = 0.0f64;
     let mut centre = vec![0.0; q];
     for (c, m) in centre.iter_mut().enumerate() {
@@ -211,6 +227,29 @@ fn fill_the_box(outcome: &mut Outcome) {
         }
     }
     outcome.kernel.length_scale *= s;
+}
+
+/// Points in the plane turned by angle `a`.
+fn turn(points: &[[f64; 2]], a: f64) -> Vec<[f64; 2]> {
+    let (s, c) = a.sin_cos();
+    points
+        .iter()
+        .map(|p| [c * p[0] - s * p[1], s * p[0] + c * p[1]])
+        .collect()
+}
+
+/// The larger half-width of the bounding box of points in the plane.
+fn half_width(points: &[[f64; 2]]) -> f64 {
+    (0..2)
+        .map(|d| {
+            let (lo, hi) = points
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                    (lo.min(p[d]), hi.max(p[d]))
+                });
+            0.5 * (hi - lo)
+        })
+        .fold(0.0, f64::max)
 }
 
 #[cfg(test)]
@@ -438,6 +477,18 @@ mod tests {
         let (e0, e1) = (extent(0), extent(1));
         let half = (0.5 * (e0.1 - e0.0)).max(0.5 * (e1.1 - e1.0));
         assert!((half - 1.0).abs() < 1e-12, "{e0:?} {e1:?}");
+        // Turned by any angle, the box is no smaller (to the search's step).
+        for k in 0..90 {
+            let (s, c) = (k as f64 * 2.0_f64.to_radians()).sin_cos();
+            let r: Vec<[f64; 2]> = (0..25)
+                .map(|i| [c * x[(i, 0)] - s * x[(i, 1)], s * x[(i, 0)] + c * x[(i, 1)]])
+                .collect();
+            let w = |d: usize| {
+                let v = r.iter().map(|p| p[d]);
+                0.5 * (v.clone().fold(f64::NEG_INFINITY, f64::max) - v.fold(f64::INFINITY, f64::min))
+            };
+            assert!(w(0).max(w(1)) >= 1.0 - 1e-4, "turned by {}: {} {}", 2 * k, w(0), w(1));
+        }
         assert!(((e0.0 + e0.1) / 2.0).abs() < 1e-12 && ((e1.0 + e1.1) / 2.0).abs() < 1e-12);
         for (dl, dm) in [(1.01, 1.0), (0.99, 1.0), (1.0, 1.01), (1.0, 0.99)] {
             let (l, mu) = (k.length_scale * dl, k.noise * dm);
