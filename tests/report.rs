@@ -67,9 +67,13 @@ fn report_writes_every_file_and_fails_atomically() {
         assert_eq!((reader.info().width, reader.info().height), (720, 440));
     }
     // CSV tables: q = 1..3, two transforms, GPLVM, its L-BFGS twin, the
-    // convex blend and the plausible rule at q = 2, and PCA.
+    // convex blend and the plausible rule at q = 2, and PCA; for the log
+    // transform also the learned kernel's GP, convex blend and plausible rule.
     let loo = std::fs::read_to_string(rep.join("loo.csv")).unwrap();
-    assert_eq!(loo.lines().count(), 1 + 2 * (3 + 1 + 1 + 1 + 3), "{loo}");
+    assert_eq!(loo.lines().count(), 1 + 2 * (3 + 1 + 1 + 1 + 3) + 3, "{loo}");
+    for method in ["gplvm-learned", "convex-learned", "gplvm-learned-plausible"] {
+        assert!(loo.contains(&format!("log,{method},2,")), "{method}: {loo}");
+    }
     for line in loo.lines().skip(1) {
         let cols: Vec<&str> = line.split(',').collect();
         for v in &cols[3..6] {
@@ -78,26 +82,28 @@ fn report_writes_every_file_and_fails_atomically() {
         }
     }
     let per = std::fs::read_to_string(rep.join("loo-materials.csv")).unwrap();
-    assert_eq!(per.lines().count(), 1 + 2 * 9 * 6);
-    // Plausibility: a 3 x 3 grid, two transforms, two rules; the plausible
-    // rule never clamps more than the GP at the same point.
+    assert_eq!(per.lines().count(), 1 + (2 * 9 + 3) * 6);
+    // Plausibility: a 3 x 3 grid, three models (log with the fixed and the
+    // learned kernel, raw), two rules; the plausible rule never clamps more
+    // than the GP at the same point.
     assert!(md.contains("## Plausibility") && md.contains("(plausibility.png)"));
+    assert!(md.contains("How spread the map is") && md.contains("log with the learned kernel"));
     let pl = std::fs::read_to_string(rep.join("plausibility.csv")).unwrap();
     let rows: Vec<Vec<String>> = pl
         .lines()
         .skip(1)
         .map(|l| l.split(',').map(str::to_string).collect())
         .collect();
-    assert_eq!(rows.len(), 2 * 2 * 9, "{pl}");
+    assert_eq!(rows.len(), 3 * 2 * 9, "{pl}");
     for r in &rows {
-        let clamped: f64 = r[4].parse().unwrap();
+        let clamped: f64 = r[5].parse().unwrap();
         assert!((0.0..=1.0).contains(&clamped), "{r:?}");
-        if r[1] == "plausible" {
+        if r[2] == "plausible" {
             let gp = rows
                 .iter()
-                .find(|g| g[0] == r[0] && g[1] == "gp" && g[2] == r[2] && g[3] == r[3])
+                .find(|g| g[..2] == r[..2] && g[2] == "gp" && g[3..5] == r[3..5])
                 .unwrap();
-            let gp_clamped: f64 = gp[4].parse().unwrap();
+            let gp_clamped: f64 = gp[5].parse().unwrap();
             assert!(
                 clamped <= gp_clamped * (1.0 + 1e-9) + 1e-15,
                 "{r:?} vs {gp:?}"

@@ -106,6 +106,8 @@ pub struct SizeRow {
 /// One latent point of the plausibility grid under one blend rule.
 pub struct PlausibilityRow {
     pub transform: TransformKind,
+    /// The model's kernel: `fixed` (l = 1, mu = 1e-4) or `learned`.
+    pub kernel: &'static str,
     pub rule: BlendRule,
     pub x: [f64; 2],
     pub clamped_reflectance: f64,
@@ -144,6 +146,12 @@ pub struct Results {
     /// The plausibility grid of each transform's q = 2 model, row by row
     /// from the top, under each rule.
     pub plausibility: Vec<PlausibilityRow>,
+    /// How spread each q = 2 model's map is: transform, kernel and the median
+    /// distance from a material to its nearest neighbour in the latent plane.
+    pub spread: Vec<(TransformKind, &'static str, f64)>,
+    /// The leave-one-out label of the q = 2 Hooke-Jeeves fit, whose model
+    /// the maps, the precision comparison and the plausible rule use.
+    pub kept_label: &'static str,
     /// Fits of synthetic databases by size (`--growth`).
     pub growth: Vec<super::growth::GrowthRow>,
 }
@@ -184,6 +192,8 @@ struct Transformed {
     gram: GramData,
     y: Mat<f64>,
     kept: Option<Fit>,
+    /// The q = 2 fit with the kernel learned (log transform only).
+    learned: Option<Fit>,
 }
 
 /// Run every measurement of `plan` on `data`, building stores and model
@@ -224,11 +234,16 @@ pub fn measure(
         steps.say("albedo map: size vs time")?;
         map_sizes(log_model, raw_model, plan, r)?;
         steps.say(&format!(
-            "plausibility at {0} x {0} points of the map, both transforms, both blend rules",
+            "plausibility at {0} x {0} points of the map, each model, both blend rules",
             plan.plausibility_grid
         ))?;
-        plausibility(log_model, TransformKind::Log, plan.plausibility_grid, r)?;
-        plausibility(raw_model, TransformKind::Raw, plan.plausibility_grid, r)?;
+        plausibility(log_model, TransformKind::Log, "fixed", plan.plausibility_grid, r)?;
+        if let Some(lf) = &log.learned {
+            let learned =
+                in_memory_model(work, "log-learned", data, lf, &log.store, &log.y, &log.gram)?;
+            plausibility(&learned, TransformKind::Log, "learned", plan.plausibility_grid, r)?;
+        }
+        plausibility(raw_model, TransformKind::Raw, "fixed", plan.plausibility_grid, r)?;
     }
     Ok(())
 }
@@ -247,6 +262,7 @@ pub fn grid_points(grid: usize) -> Vec<[f64; 2]> {
 fn plausibility(
     model: &Model,
     transform: TransformKind,
+    kernel: &'static str,
     grid: usize,
     r: &mut Results,
 ) -> Result<(), Error> {
@@ -256,6 +272,7 @@ fn plausibility(
             let p = blend.plausibility()?;
             r.plausibility.push(PlausibilityRow {
                 transform,
+                kernel,
                 rule,
                 x,
                 clamped_reflectance: p.clamped_reflectance,
@@ -266,6 +283,22 @@ fn plausibility(
         }
     }
     Ok(())
+}
+
+/// The median over the points of the distance to the nearest other point.
+fn median_nearest(x: faer::MatRef<'_, f64>) -> f64 {
+    let (n, q) = (x.nrows(), x.ncols());
+    let mut d: Vec<f64> = (0..n)
+        .map(|i| {
+            (0..n)
+                .filter(|&j| j != i)
+                .map(|j| (0..q).map(|c| (x[(i, c)] - x[(j, c)]).powi(2)).sum::<f64>())
+                .fold(f64::INFINITY, f64::min)
+                .sqrt()
+        })
+        .collect();
+    d.sort_by(f64::total_cmp);
+    if n < 2 { 0.0 } else { d[(n - 1) / 2] }
 }
 
 /// One transform: its store, the fits for q = 1..Q (and q = 2 by the other
@@ -303,40 +336,65 @@ fn per_transform(
         r.fits.push(row);
         if q == 2 && optimizer == OptimizerKind::HookeJeeves {
             kept = Some((fit, predictors.len() - 1));
+            r.kept_label = method;
         }
     }
-    // The plausible rule's held-out predictions mix the kept fit's GP
-    // predictor with the convex one, theta_h bin by theta_h bin.
+    // The kernel learned with the points (log transform, the default).
+    let mut learned = None;
+    if transform == TransformKind::Log && plan.q_max >= 2 {
+        steps.say("log transform: the kernel learned with the points (q = 2)")?;
+        let fit = GplvmParams::new(2)
+            .optimizer(OptimizerKind::Lbfgs)
+            .learn_kernel(true)
+            .check()?
+            .fit(&gram, &NoProgress)?;
+        predictors.push(loo::gp_predictor(&fit.kernel, fit.outcome.latent.as_ref(), true)?);
+        labels.push(("gplvm-learned", 2));
+        learned = Some((fit, predictors.len() - 1));
+    }
+    // The plausible rule's held-out predictions mix a fit's GP predictor
+    // with the convex one, theta_h bin by theta_h bin.
     let mut mixes = Vec::new();
-    if let Some((fit, at)) = &kept {
+    let mut mix_labels = Vec::new();
+    let candidates = [
+        (&kept, "gplvm-plausible", "convex"),
+        (&learned, "gplvm-learned-plausible", "convex-learned"),
+    ];
+    for ((fit, at), label, convex_label) in candidates
+        .into_iter()
+        .filter_map(|(f, l, c)| f.as_ref().map(|f| (f, l, c)))
+    {
         steps.say(&format!(
-            "{name} transform: the plausible rule's steps, held out"
+            "{name} transform: the plausible rule's steps, held out ({label})"
         ))?;
         let (latent, kernel) = (fit.outcome.latent.as_ref(), &fit.kernel);
-        let gp = &predictors[*at];
         let convex = loo::convex_predictor(kernel, latent)?;
         let bars = Bars::new("plausible steps");
         let mut banded = loo::banded_steps(
             &store,
-            gp.as_ref(),
+            predictors[*at].as_ref(),
             convex.as_ref(),
             &[loo::CLAMP_BUDGET],
             &bars,
         )?;
         predictors.push(convex);
-        labels.push(("convex", 2));
+        labels.push((convex_label, 2));
         mixes.push(loo::Mix {
             from: *at,
             towards: predictors.len() - 1,
             steps: banded.remove(0),
         });
+        mix_labels.push((label, 2));
     }
     for q in 1..=plan.q_max {
         predictors.push(loo::pca_predictor(y.as_ref(), q)?);
         labels.push(("pca", q));
     }
-    if !mixes.is_empty() {
-        labels.push(("gplvm-plausible", 2));
+    labels.extend(mix_labels);
+    for (fit, kernel) in [(&kept, "fixed"), (&learned, "learned")] {
+        if let Some((fit, _)) = fit {
+            r.spread.push((transform, kernel, median_nearest(fit.outcome.latent.as_ref())));
+        }
     }
     steps.say(&format!(
         "{name} transform: leave-one-out pass ({} predictors over {} values)",
@@ -363,6 +421,7 @@ fn per_transform(
         gram,
         y,
         kept: kept.map(|(fit, _)| fit),
+        learned: learned.map(|(fit, _)| fit),
     })
 }
 

@@ -44,15 +44,15 @@ pub fn markdown(w: &mut dyn Write, r: &Results) -> io::Result<()> {
     )?;
     writeln!(
         w,
-        "| transform | rule | points | clamped median | p99 | worst | over 1% | worst albedo | albedo over 1 | low confidence |"
+        "| transform | kernel | rule | points | clamped median | p99 | worst | over 1% | worst albedo | albedo over 1 | low confidence |"
     )?;
-    writeln!(w, "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|")?;
-    for t in [TransformKind::Log, TransformKind::Raw] {
+    writeln!(w, "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|")?;
+    for (t, kernel) in MODELS {
         for rule in [BlendRule::Gp, BlendRule::Plausible] {
             let rows: Vec<&PlausibilityRow> = r
                 .plausibility
                 .iter()
-                .filter(|p| p.transform == t && p.rule == rule)
+                .filter(|p| p.transform == t && p.kernel == kernel && p.rule == rule)
                 .collect();
             if rows.is_empty() {
                 continue;
@@ -62,8 +62,9 @@ pub fn markdown(w: &mut dyn Write, r: &Results) -> io::Result<()> {
             let albedo = rows.iter().map(|p| p.max_albedo).fold(0.0, f64::max);
             writeln!(
                 w,
-                "| {} | {} | {} | {:.4}% | {:.4}% | {:.4}% | {} | {:.3} | {} | {} |",
+                "| {} | {} | {} | {} | {:.4}% | {:.4}% | {:.4}% | {} | {:.3} | {} | {} |",
                 t.name(),
+                kernel,
                 rule.name(),
                 rows.len(),
                 100.0 * quantile(&c, 0.5),
@@ -77,40 +78,72 @@ pub fn markdown(w: &mut dyn Write, r: &Results) -> io::Result<()> {
         }
     }
     writeln!(w)?;
-    for t in [TransformKind::Log, TransformKind::Raw] {
-        let gp = r.loo_row(t, "gplvm", 2);
-        let pl = r.loo_row(t, "gplvm-plausible", 2);
-        if let (Some(gp), Some(pl)) = (gp, pl) {
+    if !r.spread.is_empty() {
+        let items: Vec<String> = r
+            .spread
+            .iter()
+            .map(|(t, kernel, d)| format!("{} with the {kernel} kernel {d:.4}", t.name()))
+            .collect();
+        writeln!(
+            w,
+            "How spread the map is (the median distance from a material to its nearest \
+             neighbour in the latent plane, whose default view is [-1.1, 1.1]^2): {}.\n",
+            items.join(", ")
+        )?;
+    }
+    // Held out, against the GP of the fixed kernel's Hooke-Jeeves fit
+    // (`fit`'s default model).
+    for (t, gp_label, pl_label, what) in [
+        (TransformKind::Log, r.kept_label, "gplvm-plausible", "fixed kernel"),
+        (TransformKind::Log, "gplvm-learned", "gplvm-learned-plausible", "learned kernel"),
+        (TransformKind::Raw, r.kept_label, "gplvm-plausible", "fixed kernel"),
+    ] {
+        let base = r.loo_row(t, r.kept_label, 2);
+        let (gp, pl) = (r.loo_row(t, gp_label, 2), r.loo_row(t, pl_label, 2));
+        if let (Some(base), Some(gp), Some(pl)) = (base, gp, pl) {
+            let rel = |v: f64, b: f64| 100.0 * (v / b - 1.0);
             writeln!(
                 w,
-                "Leave-one-out, {} transform, q = 2: cosine-weighted log RMSE {:.5} with the \
-                 GP's weights, {:.5} with the plausible rule ({:+.1}%); reflectance RMSE {:.4} \
-                 and {:.4} ({:+.1}%).\n",
+                "Leave-one-out, {} transform, q = 2, {what}: cosine-weighted log RMSE {:.5} \
+                 with the GP's weights ({:+.1}% against the fixed kernel's GP), {:.5} with the \
+                 plausible rule ({:+.1}%); reflectance RMSE {:.4} and {:.4} ({:+.1}% and \
+                 {:+.1}%).\n",
                 t.name(),
                 gp.log,
+                rel(gp.log, base.log),
                 pl.log,
-                100.0 * (pl.log / gp.log - 1.0),
+                rel(pl.log, base.log),
                 gp.raw,
                 pl.raw,
-                100.0 * (pl.raw / gp.raw - 1.0)
+                rel(gp.raw, base.raw),
+                rel(pl.raw, base.raw)
             )?;
         }
     }
     Ok(())
 }
 
+/// The models of the plausibility grid: transform and kernel, in the order
+/// of the table and of the picture's rows.
+const MODELS: [(TransformKind, &str); 3] = [
+    (TransformKind::Log, "fixed"),
+    (TransformKind::Log, "learned"),
+    (TransformKind::Raw, "fixed"),
+];
+
 /// `plausibility.csv`.
 pub fn csv(dir: &Path, r: &Results) -> Result<(), Error> {
     write_file(&dir.join("plausibility.csv"), |w| {
         writeln!(
             w,
-            "transform,rule,x,y,clamped_reflectance,clamped_values,max_albedo,variance"
+            "transform,kernel,rule,x,y,clamped_reflectance,clamped_values,max_albedo,variance"
         )?;
         for p in &r.plausibility {
             writeln!(
                 w,
-                "{},{},{},{},{},{},{},{}",
+                "{},{},{},{},{},{},{},{},{}",
                 p.transform.name(),
+                p.kernel,
                 p.rule.name(),
                 p.x[0],
                 p.x[1],
@@ -129,21 +162,23 @@ const CELL: usize = 24;
 /// Gap between panels, pixels.
 const GAP: usize = 8;
 
-/// `plausibility.png`: one panel per transform (rows: log, raw) and rule
-/// (columns: gp, plausible), each cell grey by log10 of its clamped share.
+/// `plausibility.png`: one panel per model (rows: log with the fixed
+/// kernel, log with the learned kernel, raw with the fixed kernel; a model
+/// not measured leaves its row blank) and rule (columns: gp, plausible),
+/// each cell grey by log10 of its clamped share.
 pub fn picture(dir: &Path, r: &Results, grid: usize) -> Result<(), Error> {
     if r.plausibility.is_empty() || grid == 0 {
         return Ok(());
     }
     let side = grid * CELL;
-    let (w, h) = (2 * side + 3 * GAP, 2 * side + 3 * GAP);
+    let (w, h) = (2 * side + 3 * GAP, MODELS.len() * (side + GAP) + GAP);
     let mut rgb = vec![255u8; w * h * 3];
-    for (pi, t) in [TransformKind::Log, TransformKind::Raw].iter().enumerate() {
+    for (pi, (t, kernel)) in MODELS.iter().enumerate() {
         for (ri, rule) in [BlendRule::Gp, BlendRule::Plausible].iter().enumerate() {
             let rows: Vec<&PlausibilityRow> = r
                 .plausibility
                 .iter()
-                .filter(|p| p.transform == *t && p.rule == *rule)
+                .filter(|p| p.transform == *t && p.kernel == *kernel && p.rule == *rule)
                 .collect();
             if rows.len() != grid * grid {
                 continue;
