@@ -23,7 +23,7 @@ use serde::Serialize;
 use crate::data::transform::InverseForm;
 use crate::error::Result;
 use crate::model::Model;
-use crate::query::budget::{Budget, CLAMP_BUDGET, convex_weights, counted};
+use crate::query::budget::{Budget, CLAMP_BUDGET, STEPS, convex_weights, counted};
 use crate::query::reconstruct::{Bands, Blend};
 
 /// Rows a worker handles at once (fixed, so sums do not depend on the thread count).
@@ -51,8 +51,11 @@ pub enum BlendRule {
     /// reflectance: the GP's weights wherever they are plausible, and the
     /// least step along the segment to the convex blend (plausible by
     /// construction: a convex blend of non-negative values) only in the
-    /// bins where they are not. Costs one extra pass over the store per
-    /// latent point.
+    /// bins where they are not. Should the largest directional albedo of
+    /// the result exceed 1, every bin's step is then raised to the smallest
+    /// floor of the steps that brings it to 1 or below (the convex blend is
+    /// a mean of the materials, so it reflects no more than they do). Costs
+    /// one extra pass over the store per latent point.
     Plausible,
 }
 
@@ -125,14 +128,40 @@ impl Model {
                 let latent = crate::gplvm::kernel::rows_of(self.latent().as_ref());
                 let convex = convex_weights(&latent, x, self.file().kernel.length_scale, None);
                 let steps = self.plausible_steps(blend.weights(), &convex)?;
-                if steps.iter().all(|&t| t == 0.0) {
-                    return Ok(blend);
-                }
                 let dims = self.dims();
-                let bands = Bands::new(blend.weights(), convex, steps, dims.theta_d * dims.phi_d);
-                Ok(blend.with_bands(bands))
+                let per = dims.theta_d * dims.phi_d;
+                let banded = |steps: Vec<f64>| -> Result<Blend<'_>> {
+                    let blend = self.at(x)?;
+                    if steps.iter().all(|&t| t == 0.0) {
+                        return Ok(blend);
+                    }
+                    let bands = Bands::new(blend.weights(), convex.clone(), steps, per);
+                    Ok(blend.with_bands(bands))
+                };
+                // No more light out than in: while the largest directional
+                // albedo is above 1 (or above the convex blend's, should the
+                // materials themselves exceed 1), every bin's step is raised
+                // to the next floor of STEPS.
+                let ceiling = self
+                    .max_albedo_of(&self.at_weights(&convex))
+                    .max(1.0);
+                let mut b = banded(steps.clone())?;
+                for &floor in &STEPS[1..] {
+                    if self.max_albedo_of(&b) <= ceiling {
+                        break;
+                    }
+                    b = banded(steps.iter().map(|&t| t.max(floor)).collect())?;
+                }
+                Ok(b)
             }
         }
+    }
+
+    /// The largest directional albedo of a blend (point queries at the
+    /// bins of the directional rule only).
+    fn max_albedo_of(&self, blend: &Blend<'_>) -> f64 {
+        let rule = self.directional_rule();
+        largest(&rule.integrate(|b| blend.rgb(b).unwrap_or([0.0; 3]))).0
     }
 
     /// The steps of [`BlendRule::Plausible`] from weights `w` towards `v`,
