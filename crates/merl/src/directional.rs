@@ -100,6 +100,18 @@ impl DirectionalRule {
         &self.bins
     }
 
+    /// The weight of each entry of [`DirectionalRule::bins`].
+    pub fn weights(&self) -> &[f64] {
+        &self.weights
+    }
+
+    /// The entries of incidence `k` (of [`INCIDENCE_DEGREES`]) in
+    /// [`DirectionalRule::bins`] and [`DirectionalRule::weights`] are
+    /// `start_of(k) .. start_of(k + 1)`.
+    pub fn start_of(&self, k: usize) -> usize {
+        self.starts[k.min(self.starts.len() - 1)]
+    }
+
     /// Directional albedo at each of [`INCIDENCE_DEGREES`] of any function of
     /// the bin (reflectance RGB), summed in a fixed order.
     pub fn integrate(&self, mut f: impl FnMut(usize) -> [f64; 3]) -> Vec<[f64; 3]> {

@@ -66,11 +66,13 @@ pub fn plausible_predictors(
         .collect())
 }
 
-/// The steps of the banded variant of the plausible rule, one set per
-/// budget in `budgets`: the GP's leave-one-out prediction of material `i`
-/// moves towards the convex one by its own step in each `theta_h` bin, the
+/// The steps of the plausible rule, held out, one set per budget in
+/// `budgets`: the GP's leave-one-out prediction of material `i` moves
+/// towards the convex one by its own step in each `theta_h` bin, the
 /// smallest of [`crate::loo::STEPS`] for which the clamp removes at most
-/// the budget's share of that bin's cosine-weighted reflectance. Steps are
+/// the budget's share of that bin's cosine-weighted reflectance, and every
+/// bin's step is raised to the albedo floor where the prediction's largest
+/// directional albedo is above 1 (as [`crate::BlendRule::Plausible`] does). Steps are
 /// laid out bin by bin (`steps[band * N + i]`), to be mixed by
 /// [`crate::loo::Mix`].
 pub fn banded_steps(
@@ -81,7 +83,31 @@ pub fn banded_steps(
     progress: &dyn Progress,
 ) -> Result<Vec<Vec<f64>>> {
     let budget = budget_pass(store, gp, convex, true, progress)?;
-    Ok(budgets.iter().map(|&b| budget.steps(b)).collect())
+    let stacked = stack(gp, convex);
+    budgets
+        .iter()
+        .map(|&b| {
+            let mut steps = budget.steps(b);
+            super::albedo_floor::raise(store, &stacked, &mut steps)?;
+            Ok(steps)
+        })
+        .collect()
+}
+
+/// The GP predictor above the convex one: column-major `2N x N`.
+fn stack(gp: MatRef<'_, f64>, convex: MatRef<'_, f64>) -> Vec<f64> {
+    let n = gp.nrows();
+    (0..n)
+        .flat_map(|j| {
+            (0..2 * n).map(move |r| {
+                if r < n {
+                    gp[(r, j)]
+                } else {
+                    convex[(r - n, j)]
+                }
+            })
+        })
+        .collect()
 }
 
 /// One pass over the store: the clamp budget of every step for the GP and
@@ -105,18 +131,7 @@ fn budget_pass(
             .into());
         }
     }
-    // Column-major 2N x N: rows 0..N the GP predictor, N..2N the convex one.
-    let stacked: Vec<f64> = (0..n)
-        .flat_map(|j| {
-            (0..2 * n).map(move |r| {
-                if r < n {
-                    gp[(r, j)]
-                } else {
-                    convex[(r - n, j)]
-                }
-            })
-        })
-        .collect();
+    let stacked = stack(gp, convex);
     let dims = store.dims();
     let bands = if banded { dims.theta_h } else { 1 };
     let band_of = |row: usize| {
