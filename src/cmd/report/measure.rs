@@ -237,68 +237,15 @@ pub fn measure(
             "plausibility at {0} x {0} points of the map, each model, both blend rules",
             plan.plausibility_grid
         ))?;
-        plausibility(log_model, TransformKind::Log, "fixed", plan.plausibility_grid, r)?;
+        super::plausible::measure(log_model, TransformKind::Log, "fixed", plan.plausibility_grid, r)?;
         if let Some(lf) = &log.learned {
             let learned =
                 in_memory_model(work, "log-learned", data, lf, &log.store, &log.y, &log.gram)?;
-            plausibility(&learned, TransformKind::Log, "learned", plan.plausibility_grid, r)?;
+            super::plausible::measure(&learned, TransformKind::Log, "learned", plan.plausibility_grid, r)?;
         }
-        plausibility(raw_model, TransformKind::Raw, "fixed", plan.plausibility_grid, r)?;
+        super::plausible::measure(raw_model, TransformKind::Raw, "fixed", plan.plausibility_grid, r)?;
     }
     Ok(())
-}
-
-/// The centres of a `grid x grid` partition of the map's default view, row
-/// by row from the top.
-pub fn grid_points(grid: usize) -> Vec<[f64; 2]> {
-    let v = View::default();
-    let at = |k: usize, a: f64, b: f64| a + (b - a) * (k as f64 + 0.5) / grid as f64;
-    (0..grid)
-        .flat_map(|j| (0..grid).map(move |i| [at(i, v.x0, v.x1), at(grid - 1 - j, v.y0, v.y1)]))
-        .collect()
-}
-
-/// `model` (of `transform`) at the grid's points under both blend rules.
-fn plausibility(
-    model: &Model,
-    transform: TransformKind,
-    kernel: &'static str,
-    grid: usize,
-    r: &mut Results,
-) -> Result<(), Error> {
-    for rule in [BlendRule::Gp, BlendRule::Plausible] {
-        for x in grid_points(grid) {
-            let blend = model.at_with(&x, rule)?;
-            let p = blend.plausibility()?;
-            r.plausibility.push(PlausibilityRow {
-                transform,
-                kernel,
-                rule,
-                x,
-                clamped_reflectance: p.clamped_reflectance,
-                clamped_values: p.clamped_values,
-                max_albedo: p.max_albedo,
-                variance: blend.confidence().variance,
-            });
-        }
-    }
-    Ok(())
-}
-
-/// The median over the points of the distance to the nearest other point.
-fn median_nearest(x: faer::MatRef<'_, f64>) -> f64 {
-    let (n, q) = (x.nrows(), x.ncols());
-    let mut d: Vec<f64> = (0..n)
-        .map(|i| {
-            (0..n)
-                .filter(|&j| j != i)
-                .map(|j| (0..q).map(|c| (x[(i, c)] - x[(j, c)]).powi(2)).sum::<f64>())
-                .fold(f64::INFINITY, f64::min)
-                .sqrt()
-        })
-        .collect();
-    d.sort_by(f64::total_cmp);
-    if n < 2 { 0.0 } else { d[(n - 1) / 2] }
 }
 
 /// One transform: its store, the fits for q = 1..Q (and q = 2 by the other
@@ -393,7 +340,7 @@ fn per_transform(
     labels.extend(mix_labels);
     for (fit, kernel) in [(&kept, "fixed"), (&learned, "learned")] {
         if let Some((fit, _)) = fit {
-            r.spread.push((transform, kernel, median_nearest(fit.outcome.latent.as_ref())));
+            r.spread.push((transform, kernel, super::plausible::median_nearest(fit.outcome.latent.as_ref())));
         }
     }
     steps.say(&format!(

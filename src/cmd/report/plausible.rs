@@ -7,7 +7,7 @@
 use std::io::{self, Write};
 use std::path::Path;
 
-use brdf_atlas_core::{BlendRule, TransformKind};
+use brdf_atlas_core::{BlendRule, Model, TransformKind, View};
 
 use super::csv::e;
 use super::measure::{PlausibilityRow, Results};
@@ -130,6 +130,59 @@ const MODELS: [(TransformKind, &str); 3] = [
     (TransformKind::Log, "learned"),
     (TransformKind::Raw, "fixed"),
 ];
+
+/// The centres of a `grid x grid` partition of the map's default view, row
+/// by row from the top.
+fn grid_points(grid: usize) -> Vec<[f64; 2]> {
+    let v = View::default();
+    let at = |k: usize, a: f64, b: f64| a + (b - a) * (k as f64 + 0.5) / grid as f64;
+    (0..grid)
+        .flat_map(|j| (0..grid).map(move |i| [at(i, v.x0, v.x1), at(grid - 1 - j, v.y0, v.y1)]))
+        .collect()
+}
+
+/// `model` (of `transform`) at the grid's points under both blend rules.
+pub fn measure(
+    model: &Model,
+    transform: TransformKind,
+    kernel: &'static str,
+    grid: usize,
+    r: &mut Results,
+) -> Result<(), Error> {
+    for rule in [BlendRule::Gp, BlendRule::Plausible] {
+        for x in grid_points(grid) {
+            let blend = model.at_with(&x, rule)?;
+            let p = blend.plausibility()?;
+            r.plausibility.push(PlausibilityRow {
+                transform,
+                kernel,
+                rule,
+                x,
+                clamped_reflectance: p.clamped_reflectance,
+                clamped_values: p.clamped_values,
+                max_albedo: p.max_albedo,
+                variance: blend.confidence().variance,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The median over the points of the distance to the nearest other point.
+pub fn median_nearest(x: faer::MatRef<'_, f64>) -> f64 {
+    let (n, q) = (x.nrows(), x.ncols());
+    let mut d: Vec<f64> = (0..n)
+        .map(|i| {
+            (0..n)
+                .filter(|&j| j != i)
+                .map(|j| (0..q).map(|c| (x[(i, c)] - x[(j, c)]).powi(2)).sum::<f64>())
+                .fold(f64::INFINITY, f64::min)
+                .sqrt()
+        })
+        .collect();
+    d.sort_by(f64::total_cmp);
+    if n < 2 { 0.0 } else { d[(n - 1) / 2] }
+}
 
 /// `plausibility.csv`.
 pub fn csv(dir: &Path, r: &Results) -> Result<(), Error> {
