@@ -119,13 +119,7 @@ fn atlas(c: &mut Criterion) {
                 .expect("map")
         })
     });
-    let h = View::default().x1 / 100.0;
-    let small = View {
-        x0: 0.137 - h,
-        x1: 0.137 + h,
-        y0: -0.291 - h,
-        y1: -0.291 + h,
-    };
+    let small = View::zoomed_hundredfold();
     let budget = log.field_budget(1024 * 1024, brdf_atlas_core::DEFAULT_SAMPLES);
     g.bench_function("log_field_build_1/100", |b| {
         b.iter(|| {

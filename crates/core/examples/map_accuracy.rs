@@ -65,19 +65,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .ok_or("usage: map_accuracy MODEL [PIXELS]")?;
     let count: usize = std::env::args().nth(2).map_or(Ok(24), |s| s.parse())?;
     let model = Model::open(&path)?;
-    let h = View::default().x1 / 100.0;
-    let (cx, cy) = (0.137, -0.291);
     let views = [
         ("default", View::default()),
-        (
-            "1/100",
-            View {
-                x0: cx - h,
-                x1: cx + h,
-                y0: cy - h,
-                y1: cy + h,
-            },
-        ),
+        ("1/100", View::zoomed_hundredfold()),
     ];
     println!(
         "view     method                                        max_err  mean_err  first_s  again_s"

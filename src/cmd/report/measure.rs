@@ -595,13 +595,7 @@ fn map_samples(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error>
 /// and time, first and again (a field is kept by the model).
 fn map_methods(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error> {
     let size = plan.timed_size;
-    let h = View::default().x1 / 100.0;
-    let small = View {
-        x0: 0.137 - h,
-        x1: 0.137 + h,
-        y0: -0.291 - h,
-        y1: -0.291 + h,
-    };
+    let small = View::zoomed_hundredfold();
     let mut seed = 0x5eed_u64;
     let mut next = || {
         seed = seed
