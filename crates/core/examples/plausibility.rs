@@ -5,7 +5,8 @@
 //! cargo run --release -p brdf-atlas-core --example plausibility -- MODEL [POINTS] [SEED]
 //! ```
 //!
-//! Prints, per rule, the distribution (median, 90th, 99th percentile, worst)
+//! `PLAUSIBILITY_RULES=gp,plausible` chooses the rules swept (both by
+//! default). Prints, per rule, the distribution (median, 90th, 99th percentile, worst)
 //! of the clamped share of reflectance, the clamped share of values and the
 //! largest directional albedo, and how many points are low-confidence.
 
@@ -112,7 +113,12 @@ fn sweep(model: &Model, points: usize, seed: u64) -> Result<(), Box<dyn std::err
     let xs: Vec<[f64; 2]> = (0..points)
         .map(|_| [rng.range(view.x0, view.x1), rng.range(view.y0, view.y1)])
         .collect();
-    for rule in [BlendRule::Gp, BlendRule::Plausible] {
+    // `PLAUSIBILITY_RULES=plausible` (a comma-separated list) to sweep fewer rules.
+    let rules: Vec<BlendRule> = match std::env::var("PLAUSIBILITY_RULES") {
+        Ok(list) => list.split(',').filter_map(BlendRule::parse).collect(),
+        Err(_) => vec![BlendRule::Gp, BlendRule::Plausible],
+    };
+    for rule in rules {
         let start = std::time::Instant::now();
         let (mut refl, mut vals, mut alb, mut low) = (vec![], vec![], vec![], 0);
         for x in &xs {
