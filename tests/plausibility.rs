@@ -28,9 +28,18 @@ fn reconstruct_json_is_the_blend_the_library_computes() {
     // the map's box where the rule moves the weights.
     let moving = (0..81)
         .map(|k| [-2.0 + 0.5 * (k % 9) as f64, -2.0 + 0.5 * (k / 9) as f64])
-        .find(|x| model.at_with(x, BlendRule::Plausible).unwrap().steps().is_some())
+        .find(|x| {
+            model
+                .at_with(x, BlendRule::Plausible)
+                .unwrap()
+                .steps()
+                .is_some()
+        })
         .expect("a point where the plausible rule moves the weights");
-    for (rule, at) in [(BlendRule::Gp, [0.3, -0.45]), (BlendRule::Plausible, moving)] {
+    for (rule, at) in [
+        (BlendRule::Gp, [0.3, -0.45]),
+        (BlendRule::Plausible, moving),
+    ] {
         let out_path = tmp.path().join(format!("{}.binary", rule.name()));
         let out = brdf_atlas([
             "reconstruct".as_ref(),
@@ -78,7 +87,10 @@ fn reconstruct_json_is_the_blend_the_library_computes() {
             }
         }
         if rule == BlendRule::Plausible {
-            assert!(!rec["moved"].is_null(), "the test point must move the weights");
+            assert!(
+                !rec["moved"].is_null(),
+                "the test point must move the weights"
+            );
         }
         assert_eq!(rec["blend"], rule.name());
         assert_eq!(rec["point"], serde_json::json!(at));

@@ -70,7 +70,11 @@ fn report_writes_every_file_and_fails_atomically() {
     // convex blend and the plausible rule at q = 2, and PCA; for the log
     // transform also the learned kernel's GP, convex blend and plausible rule.
     let loo = std::fs::read_to_string(rep.join("loo.csv")).unwrap();
-    assert_eq!(loo.lines().count(), 1 + 2 * (3 + 1 + 1 + 1 + 3) + 3, "{loo}");
+    assert_eq!(
+        loo.lines().count(),
+        1 + 2 * (3 + 1 + 1 + 1 + 3) + 3,
+        "{loo}"
+    );
     for method in ["gplvm-learned", "convex-learned", "gplvm-learned-plausible"] {
         assert!(loo.contains(&format!("log,{method},2,")), "{method}: {loo}");
     }

@@ -160,7 +160,9 @@ pub enum ParamError {
         initial_step: f64,
     },
     /// Learning the kernel was asked of an optimiser that cannot.
-    #[error("learning the kernel needs the L-BFGS optimiser (Hooke-Jeeves moves one point at a time)")]
+    #[error(
+        "learning the kernel needs the L-BFGS optimiser (Hooke-Jeeves moves one point at a time)"
+    )]
     LearnKernelNeedsLbfgs,
     /// Hooke-Jeeves' step reduction is not in (0, 1).
     #[error("step reduction {0} must lie in (0, 1)")]

@@ -2,9 +2,9 @@
 //! recomputation: each material's prediction from the others, its clamp
 //! budget per theta_h bin at every step, and its largest directional albedo.
 
+use brdf_atlas_core::fit_dir;
 use brdf_atlas_core::loo::{self, CLAMP_BUDGET, STEPS};
 use brdf_atlas_core::{FitOptions, GplvmParams, Model, NoProgress, Precision, TransformKind};
-use brdf_atlas_core::fit_dir;
 use brdf_merl::directional::largest;
 use brdf_merl::{Dims, DirectionalRule, synth};
 
@@ -30,9 +30,15 @@ fn held_out_steps_equal_a_dense_recomputation() {
     let (kernel, latent) = (m.file().kernel, m.latent().as_ref());
     let gp = loo::gp_predictor(&kernel, latent, true).unwrap();
     let convex = loo::convex_predictor(&kernel, latent).unwrap();
-    let steps = loo::banded_steps(m.store(), gp.as_ref(), convex.as_ref(), &[CLAMP_BUDGET], &NoProgress)
-        .unwrap()
-        .remove(0);
+    let steps = loo::banded_steps(
+        m.store(),
+        gp.as_ref(),
+        convex.as_ref(),
+        &[CLAMP_BUDGET],
+        &NoProgress,
+    )
+    .unwrap()
+    .remove(0);
     let store = m.store();
     let (n, bins, per) = (store.n(), DIMS.bins(), DIMS.theta_d * DIMS.phi_d);
     assert_eq!(steps.len(), DIMS.theta_h * n);
@@ -48,7 +54,13 @@ fn held_out_steps_equal_a_dense_recomputation() {
         let (ci, co) = DIMS.angles_of(bin).cosines();
         (ci * co).max(0.0)
     };
-    let f = |y: f64, bin: usize| if cos(bin) < 1e-6 { 0.0 } else { y.exp_m1() / cos(bin) };
+    let f = |y: f64, bin: usize| {
+        if cos(bin) < 1e-6 {
+            0.0
+        } else {
+            y.exp_m1() / cos(bin)
+        }
+    };
     let rule = DirectionalRule::new(DIMS);
     let (mut moved, mut floored) = (0, 0);
     for i in 0..n {
@@ -74,7 +86,13 @@ fn held_out_steps_equal_a_dense_recomputation() {
             if total > 0.0 { removed / total } else { 0.0 }
         };
         let mut want: Vec<f64> = (0..DIMS.theta_h)
-            .map(|b| STEPS.iter().copied().find(|&t| share(b, t) <= CLAMP_BUDGET).unwrap_or(1.0))
+            .map(|b| {
+                STEPS
+                    .iter()
+                    .copied()
+                    .find(|&t| share(b, t) <= CLAMP_BUDGET)
+                    .unwrap_or(1.0)
+            })
             .collect();
         moved += want.iter().filter(|&&t| t > 0.0).count();
         // The albedo floor.
@@ -107,9 +125,18 @@ fn held_out_steps_equal_a_dense_recomputation() {
             // only where the dense share sits on the budget itself.
             let k = STEPS.iter().position(|&s| s == got.min(*w)).unwrap();
             let on_edge = (share(b, STEPS[k]) / CLAMP_BUDGET - 1.0).abs() < 1e-6;
-            assert!(got == *w || on_edge, "material {i}, theta_h bin {b}: {got} vs {w}");
+            assert!(
+                got == *w || on_edge,
+                "material {i}, theta_h bin {b}: {got} vs {w}"
+            );
         }
     }
-    assert!(moved > 0, "no held-out prediction clamps: the test exercises nothing");
-    assert!(floored > 0, "no held-out prediction reflects more than 1: the floor is not exercised");
+    assert!(
+        moved > 0,
+        "no held-out prediction clamps: the test exercises nothing"
+    );
+    assert!(
+        floored > 0,
+        "no held-out prediction reflects more than 1: the floor is not exercised"
+    );
 }

@@ -179,7 +179,11 @@ fn the_plausible_rule_keeps_every_theta_h_bin_within_budget_and_the_gp_where_it_
                 assert!((got - want).abs() < 1e-12, "{x:?}: convex {got} vs {want}");
             }
             let at = |t: f64| -> Vec<f64> {
-                gp.weights().iter().zip(convex).map(|(w, v)| w + t * (v - w)).collect()
+                gp.weights()
+                    .iter()
+                    .zip(convex)
+                    .map(|(w, v)| w + t * (v - w))
+                    .collect()
             };
             assert_eq!(steps.len(), DIMS.theta_h);
             // The albedo floor (see below) raises every bin to at least the
@@ -190,10 +194,16 @@ fn the_plausible_rule_keeps_every_theta_h_bin_within_budget_and_the_gp_where_it_
                 assert_eq!(pl.weights_in(b), at(t).as_slice(), "{x:?} bin {b}");
                 // Within budget, unless even the convex blend (t = 1) is not.
                 let sp = share_in(b, &at(t));
-                assert!(sp <= CLAMP_BUDGET * (1.0 + 1e-9) || t == 1.0, "{x:?} bin {b}: {sp} at {t}");
+                assert!(
+                    sp <= CLAMP_BUDGET * (1.0 + 1e-9) || t == 1.0,
+                    "{x:?} bin {b}: {sp} at {t}"
+                );
                 // The smallest such step: the one before it is over budget.
                 if k > 0 && t > floor {
-                    assert!(share_in(b, &at(STEPS[k - 1])) > CLAMP_BUDGET, "{x:?} bin {b}: smaller was enough");
+                    assert!(
+                        share_in(b, &at(STEPS[k - 1])) > CLAMP_BUDGET,
+                        "{x:?} bin {b}: smaller was enough"
+                    );
                 }
             }
             // The blend's own figures and values follow the bins' weights.
@@ -252,10 +262,15 @@ fn the_plausible_rule_brings_the_largest_albedo_to_one() {
                                 continue;
                             }
                             store.copy_rows(row, &mut z);
-                            let t = store.mean()[row] + v.iter().zip(&z).map(|(a, b)| a * b).sum::<f64>();
+                            let t = store.mean()[row]
+                                + v.iter().zip(&z).map(|(a, b)| a * b).sum::<f64>();
                             let (ci, co) = DIMS.angles_of(bin).cosines();
                             let c = ci * co;
-                            *out = if c < 1e-6 { 0.0 } else { (t.exp_m1() / c).max(0.0) };
+                            *out = if c < 1e-6 {
+                                0.0
+                            } else {
+                                (t.exp_m1() / c).max(0.0)
+                            };
                         }
                         rgb
                     };
@@ -265,10 +280,16 @@ fn the_plausible_rule_brings_the_largest_albedo_to_one() {
             }
             None => 1.0,
         };
-        assert!(a_pl <= ceiling * (1.0 + 1e-6), "{x:?}: albedo {a_gp} -> {a_pl}, ceiling {ceiling}");
+        assert!(
+            a_pl <= ceiling * (1.0 + 1e-6),
+            "{x:?}: albedo {a_gp} -> {a_pl}, ceiling {ceiling}"
+        );
         if a_gp > ceiling {
             raised += 1;
-            assert!(pl.steps().is_some(), "{x:?}: albedo {a_gp} left above {ceiling}");
+            assert!(
+                pl.steps().is_some(),
+                "{x:?}: albedo {a_gp} left above {ceiling}"
+            );
         }
     }
     assert!(raised > 0, "no point of the grid has a GP albedo above 1");

@@ -237,13 +237,31 @@ pub fn measure(
             "plausibility at {0} x {0} points of the map, each model, both blend rules",
             plan.plausibility_grid
         ))?;
-        super::plausible::measure(log_model, TransformKind::Log, "fixed", plan.plausibility_grid, r)?;
+        super::plausible::measure(
+            log_model,
+            TransformKind::Log,
+            "fixed",
+            plan.plausibility_grid,
+            r,
+        )?;
         if let Some(lf) = &log.learned {
             let learned =
                 in_memory_model(work, "log-learned", data, lf, &log.store, &log.y, &log.gram)?;
-            super::plausible::measure(&learned, TransformKind::Log, "learned", plan.plausibility_grid, r)?;
+            super::plausible::measure(
+                &learned,
+                TransformKind::Log,
+                "learned",
+                plan.plausibility_grid,
+                r,
+            )?;
         }
-        super::plausible::measure(raw_model, TransformKind::Raw, "fixed", plan.plausibility_grid, r)?;
+        super::plausible::measure(
+            raw_model,
+            TransformKind::Raw,
+            "fixed",
+            plan.plausibility_grid,
+            r,
+        )?;
     }
     Ok(())
 }
@@ -295,7 +313,11 @@ fn per_transform(
             .learn_kernel(true)
             .check()?
             .fit(&gram, &NoProgress)?;
-        predictors.push(loo::gp_predictor(&fit.kernel, fit.outcome.latent.as_ref(), true)?);
+        predictors.push(loo::gp_predictor(
+            &fit.kernel,
+            fit.outcome.latent.as_ref(),
+            true,
+        )?);
         labels.push(("gplvm-learned", 2));
         learned = Some((fit, predictors.len() - 1));
     }
@@ -340,7 +362,11 @@ fn per_transform(
     labels.extend(mix_labels);
     for (fit, kernel) in [(&kept, "fixed"), (&learned, "learned")] {
         if let Some((fit, _)) = fit {
-            r.spread.push((transform, kernel, super::plausible::median_nearest(fit.outcome.latent.as_ref())));
+            r.spread.push((
+                transform,
+                kernel,
+                super::plausible::median_nearest(fit.outcome.latent.as_ref()),
+            ));
         }
     }
     steps.say(&format!(

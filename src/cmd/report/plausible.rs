@@ -94,9 +94,24 @@ pub fn markdown(w: &mut dyn Write, r: &Results) -> io::Result<()> {
     // Held out, against the GP of the fixed kernel's Hooke-Jeeves fit
     // (`fit`'s default model).
     for (t, gp_label, pl_label, what) in [
-        (TransformKind::Log, r.kept_label, "gplvm-plausible", "fixed kernel"),
-        (TransformKind::Log, "gplvm-learned", "gplvm-learned-plausible", "learned kernel"),
-        (TransformKind::Raw, r.kept_label, "gplvm-plausible", "fixed kernel"),
+        (
+            TransformKind::Log,
+            r.kept_label,
+            "gplvm-plausible",
+            "fixed kernel",
+        ),
+        (
+            TransformKind::Log,
+            "gplvm-learned",
+            "gplvm-learned-plausible",
+            "learned kernel",
+        ),
+        (
+            TransformKind::Raw,
+            r.kept_label,
+            "gplvm-plausible",
+            "fixed kernel",
+        ),
     ] {
         let base = r.loo_row(t, r.kept_label, 2);
         let (gp, pl) = (r.loo_row(t, gp_label, 2), r.loo_row(t, pl_label, 2));

@@ -236,7 +236,10 @@ pub fn evaluate_mixed(
             } else {
                 for k in 0..len {
                     let band = dims.unbin((r0 + k) % bins).0;
-                    let (src, dst) = (&g.out[k * mn..(k + 1) * mn], &mut g.mixed[k * mt..(k + 1) * mt]);
+                    let (src, dst) = (
+                        &g.out[k * mn..(k + 1) * mn],
+                        &mut g.mixed[k * mt..(k + 1) * mt],
+                    );
                     dst[..mn].copy_from_slice(src);
                     for (m, mix) in mixes.iter().enumerate() {
                         let steps = &mix.steps[band * n..(band + 1) * n];

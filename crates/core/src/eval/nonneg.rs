@@ -180,7 +180,13 @@ fn budget_pass(
                 };
                 let col = &mut out[k * 2 * n..(k + 1) * 2 * n];
                 col.iter_mut().for_each(|v| *v += mean[row]);
-                budget.add(band_of(row), &col[..n], &col[n..], form, cos[row % dims.bins()]);
+                budget.add(
+                    band_of(row),
+                    &col[..n],
+                    &col[n..],
+                    form,
+                    cos[row % dims.bins()],
+                );
             }
             progress.advance(len as u64);
         },

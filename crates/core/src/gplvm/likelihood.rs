@@ -224,7 +224,10 @@ mod tests {
             length_scale: 0.7,
             noise: 1e-2,
         };
-        let g = cost_and_full_gradient(&kernel, &data, x.as_ref()).unwrap().1.latent;
+        let g = cost_and_full_gradient(&kernel, &data, x.as_ref())
+            .unwrap()
+            .1
+            .latent;
         let h = 1e-6;
         for i in 0..8 {
             for c in 0..2 {

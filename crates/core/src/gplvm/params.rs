@@ -200,7 +200,10 @@ fn fill_the_box(outcome: &mut Outcome) {
         let angle = (0..360)
             .map(|k| (k as f64 * 0.25).to_radians())
             .map(|a| (half_width(&turn(&points, a)), a))
-            .fold((f64::INFINITY, 0.0), |best, t| if t.0 < best.0 { t } else { best })
+            .fold(
+                (f64::INFINITY, 0.0),
+                |best, t| if t.0 < best.0 { t } else { best },
+            )
             .1;
         for (i, p) in turn(&points, angle).iter().enumerate() {
             x[(i, 0)] = p[0];
@@ -458,13 +461,18 @@ mod tests {
         check_box_and_monotone(&data, &fit.kernel, &fit.outcome);
         assert!(fit.outcome.cost < fixed.outcome.cost, "{fit:?}");
         let k = fit.kernel;
-        assert!((LEARNED_LENGTH_SCALE_RANGE.0..=LEARNED_LENGTH_SCALE_RANGE.1).contains(&k.length_scale));
+        assert!(
+            (LEARNED_LENGTH_SCALE_RANGE.0..=LEARNED_LENGTH_SCALE_RANGE.1).contains(&k.length_scale)
+        );
         assert!((LEARNED_NOISE_RANGE.0..=LEARNED_NOISE_RANGE.1).contains(&k.noise));
         // At the learned kernel, the dense cost rises when either
         // hyperparameter moves by 1% in either direction (unless at a bound).
         let x = fit.outcome.latent.as_ref();
         let at = |l: f64, mu: f64| {
-            let k = Kernel { length_scale: l, noise: mu };
+            let k = Kernel {
+                length_scale: l,
+                noise: mu,
+            };
             cost(&k, &data, x).unwrap()
         };
         let best = at(k.length_scale, k.noise);
@@ -472,7 +480,10 @@ mod tests {
         // the length scale), and the cost is the optimiser's own.
         let extent = |c: usize| {
             let v: Vec<f64> = (0..25).map(|i| x[(i, c)]).collect();
-            (v.iter().cloned().fold(f64::INFINITY, f64::min), v.iter().cloned().fold(f64::NEG_INFINITY, f64::max))
+            (
+                v.iter().cloned().fold(f64::INFINITY, f64::min),
+                v.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
+            )
         };
         let (e0, e1) = (extent(0), extent(1));
         let half = (0.5 * (e0.1 - e0.0)).max(0.5 * (e1.1 - e1.0));
@@ -485,22 +496,36 @@ mod tests {
                 .collect();
             let w = |d: usize| {
                 let v = r.iter().map(|p| p[d]);
-                0.5 * (v.clone().fold(f64::NEG_INFINITY, f64::max) - v.fold(f64::INFINITY, f64::min))
+                0.5 * (v.clone().fold(f64::NEG_INFINITY, f64::max)
+                    - v.fold(f64::INFINITY, f64::min))
             };
-            assert!(w(0).max(w(1)) >= 1.0 - 1e-4, "turned by {}: {} {}", 2 * k, w(0), w(1));
+            assert!(
+                w(0).max(w(1)) >= 1.0 - 1e-4,
+                "turned by {}: {} {}",
+                2 * k,
+                w(0),
+                w(1)
+            );
         }
         assert!(((e0.0 + e0.1) / 2.0).abs() < 1e-12 && ((e1.0 + e1.1) / 2.0).abs() < 1e-12);
         for (dl, dm) in [(1.01, 1.0), (0.99, 1.0), (1.0, 1.01), (1.0, 0.99)] {
             let (l, mu) = (k.length_scale * dl, k.noise * dm);
-            if l <= LEARNED_LENGTH_SCALE_RANGE.1 && mu >= LEARNED_NOISE_RANGE.0 && mu <= LEARNED_NOISE_RANGE.1 {
-                assert!(at(l, mu) >= best - 1e-9 * best.abs(), "{dl} {dm}: {} < {best}", at(l, mu));
+            if l <= LEARNED_LENGTH_SCALE_RANGE.1
+                && mu >= LEARNED_NOISE_RANGE.0
+                && mu <= LEARNED_NOISE_RANGE.1
+            {
+                assert!(
+                    at(l, mu) >= best - 1e-9 * best.abs(),
+                    "{dl} {dm}: {} < {best}",
+                    at(l, mu)
+                );
             }
         }
     }
 
     #[test]
     fn learned_noise_driven_to_either_bound_stays_finite() {
-        use crate::gplvm::kernel::{LEARNED_NOISE_RANGE};
+        use crate::gplvm::kernel::LEARNED_NOISE_RANGE;
         let mut rng = SplitMix64::new(21);
         // Pure noise, no structure: the likelihood makes the materials
         // uncorrelated, by a noise as large as the signal or by a length
@@ -525,7 +550,11 @@ mod tests {
             assert!(o.cost.is_finite() && o.latent.as_ref().norm_max() <= 1.0);
             assert!(f.kernel.noise >= LEARNED_NOISE_RANGE.0);
             let k = f.kernel.matrix(o.latent.as_ref());
-            assert!(k.llt(faer::Side::Lower).is_ok(), "K not SPD: {:?}", f.kernel);
+            assert!(
+                k.llt(faer::Side::Lower).is_ok(),
+                "K not SPD: {:?}",
+                f.kernel
+            );
         }
     }
 

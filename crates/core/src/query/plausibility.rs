@@ -142,9 +142,7 @@ impl Model {
                 // albedo is above 1 (or above the convex blend's, should the
                 // materials themselves exceed 1), every bin's step is raised
                 // to the next floor of STEPS.
-                let ceiling = self
-                    .max_albedo_of(&self.at_weights(&convex))
-                    .max(1.0);
+                let ceiling = self.max_albedo_of(&self.at_weights(&convex)).max(1.0);
                 let mut b = banded(steps.clone())?;
                 for &floor in &STEPS[1..] {
                     if self.max_albedo_of(&b) <= ceiling {

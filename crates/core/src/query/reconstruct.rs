@@ -82,7 +82,12 @@ impl Bands {
             .collect();
         let sets = distinct
             .iter()
-            .map(|&t| w.iter().zip(&convex).map(|(w, v)| w + t * (v - w)).collect())
+            .map(|&t| {
+                w.iter()
+                    .zip(&convex)
+                    .map(|(w, v)| w + t * (v - w))
+                    .collect()
+            })
             .collect();
         Bands {
             convex,
