@@ -8,8 +8,19 @@
 //! portable path (`f64::mul_add`) do the same operations per output, so
 //! the bits do not depend on the CPU.
 
+/// Columns of `c` per parallel task (a multiple of the tile's 4, so a
+/// column is a tile's or an edge's whatever the split).
+const COLUMNS: usize = 32;
+
+/// Products of at least this many multiply-adds are split between threads.
+const PARALLEL_MACS: usize = 1 << 21;
+
 /// `c = a b` with `a` `m x k`, `b` `k x p` and `c` `m x p`, column-major
 /// slices; `m = a.len() / k` and `p = b.len() / k`.
+///
+/// Large products are split by blocks of columns between threads; every
+/// output is the same chain of operations either way, so the bits do not
+/// depend on the thread count.
 ///
 /// # Panics
 /// When the lengths do not fit those shapes (a caller bug, never input).
@@ -21,6 +32,19 @@ pub fn matmul(c: &mut [f64], a: &[f64], b: &[f64], k: usize) {
     assert!(a.len().is_multiple_of(k) && b.len().is_multiple_of(k));
     let (m, p) = (a.len() / k, b.len() / k);
     assert_eq!(c.len(), m * p);
+    if m * k * p >= PARALLEL_MACS && p >= 2 * COLUMNS && m > 0 {
+        use rayon::prelude::*;
+        c.par_chunks_mut(COLUMNS * m)
+            .zip(b.par_chunks(COLUMNS * k))
+            .for_each(|(c, b)| columns(c, a, b, k));
+    } else {
+        columns(c, a, b, k);
+    }
+}
+
+/// [`matmul`] on one thread (`k > 0`, shapes checked).
+fn columns(c: &mut [f64], a: &[f64], b: &[f64], k: usize) {
+    let (m, p) = (a.len() / k, b.len() / k);
     let (m8, p4) = (m / 8 * 8, p / 4 * 4);
     #[cfg(target_arch = "x86_64")]
     if crate::simd::has_avx2_fma() {
@@ -114,6 +138,8 @@ mod tests {
             (8, 3, 4),
             (13, 7, 9),
             (300, 100, 37),
+            // Split between threads: several blocks of columns and an edge.
+            (64, 300, 203),
             (5, 0, 3),
             (0, 4, 2),
         ] {
