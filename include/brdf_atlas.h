@@ -103,9 +103,11 @@
 #define BRDF_ATLAS_BLEND_GP 0
 
 /**
- * The GP's weights moved towards a kernel-weighted average of the materials
- * just far enough that the clamp to >= 0 removes at most 0.05% of the
- * cosine-weighted reflectance (one more pass over the store).
+ * The GP's weights moved towards a kernel-weighted average of the materials,
+ * in each theta_h bin of the table just far enough that the clamp to >= 0
+ * removes at most 0.05% of that bin's cosine-weighted reflectance, then
+ * everywhere far enough that no directional albedo exceeds 1 (one more
+ * pass over the store).
  */
 #define BRDF_ATLAS_BLEND_PLAUSIBLE 1
 

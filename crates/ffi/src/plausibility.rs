@@ -10,9 +10,11 @@ use crate::status::{BrdfAtlasStatus, Failure, Result, run};
 /// The GPLVM's own weights `K^-1 k(x)` (the paper's reconstruction; what
 /// `brdf_atlas_model_reconstruct` uses).
 pub const BRDF_ATLAS_BLEND_GP: i32 = 0;
-/// The GP's weights moved towards a kernel-weighted average of the materials
-/// just far enough that the clamp to >= 0 removes at most 0.05% of the
-/// cosine-weighted reflectance (one more pass over the store).
+/// The GP's weights moved towards a kernel-weighted average of the materials,
+/// in each theta_h bin of the table just far enough that the clamp to >= 0
+/// removes at most 0.05% of that bin's cosine-weighted reflectance, then
+/// everywhere far enough that no directional albedo exceeds 1 (one more
+/// pass over the store).
 pub const BRDF_ATLAS_BLEND_PLAUSIBLE: i32 = 1;
 
 /// What the model knows at a latent point and how physical its material is.
