@@ -291,18 +291,7 @@ pub unsafe extern "C" fn brdf_atlas_model_albedo_map(
     run("brdf_atlas_model_albedo_map", || {
         let m = unsafe { handle::borrow(model) }?;
         check::planar(m)?;
-        let view: View = match unsafe { check::input(view, 1, "view") } {
-            Ok(v) => v[0].into(),
-            Err(f) if f.status == BrdfAtlasStatus::NullArgument => View::default(),
-            Err(f) => return Err(f),
-        };
-        view.check()?;
-        let max = BRDF_ATLAS_MAX_MAP_SIDE;
-        if width == 0 || height == 0 || width > max || height > max {
-            return Err(Failure::invalid(format!(
-                "map size {width}x{height} must be between 1 and {max} a side"
-            )));
-        }
+        let view = unsafe { map_window(view, width, height) }?;
         let values = check::product(&[width, height, 3], "map size")?;
         let out = unsafe { check::buffer(buf, len, values, "buf") }?;
         let samples = map_samples(samples)?;
@@ -312,6 +301,31 @@ pub unsafe extern "C" fn brdf_atlas_model_albedo_map(
         }
         Ok(())
     })
+}
+
+/// The window of a map request (`view` NULL: the default one), checked with
+/// the map's size.
+///
+/// # Safety
+/// `view` is NULL or valid for reading one `BrdfAtlasView`.
+unsafe fn map_window(
+    view: *const BrdfAtlasView,
+    width: usize,
+    height: usize,
+) -> Result<View, Failure> {
+    let view: View = match unsafe { check::input(view, 1, "view") } {
+        Ok(v) => v[0].into(),
+        Err(f) if f.status == BrdfAtlasStatus::NullArgument => View::default(),
+        Err(f) => return Err(f),
+    };
+    view.check()?;
+    let max = BRDF_ATLAS_MAX_MAP_SIDE;
+    if width == 0 || height == 0 || width > max || height > max {
+        return Err(Failure::invalid(format!(
+            "map size {width}x{height} must be between 1 and {max} a side"
+        )));
+    }
+    Ok(view)
 }
 
 /// The GP's predictive variance (`1 - k(x)^T K^-1 k(x)`: 0 at an input
@@ -345,18 +359,7 @@ pub unsafe extern "C" fn brdf_atlas_model_variance_map(
     run("brdf_atlas_model_variance_map", || {
         let m = unsafe { handle::borrow(model) }?;
         check::planar(m)?;
-        let view: View = match unsafe { check::input(view, 1, "view") } {
-            Ok(v) => v[0].into(),
-            Err(f) if f.status == BrdfAtlasStatus::NullArgument => View::default(),
-            Err(f) => return Err(f),
-        };
-        view.check()?;
-        let max = BRDF_ATLAS_MAX_MAP_SIDE;
-        if width == 0 || height == 0 || width > max || height > max {
-            return Err(Failure::invalid(format!(
-                "map size {width}x{height} must be between 1 and {max} a side"
-            )));
-        }
+        let view = unsafe { map_window(view, width, height) }?;
         let values = check::product(&[width, height], "map size")?;
         let out = unsafe { check::buffer(buf, len, values, "buf") }?;
         out.copy_from_slice(&m.variance_map(width, height, view)?);
