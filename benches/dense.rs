@@ -1,8 +1,10 @@
 //! The library's dense kernels against faer's, at the sizes the fit uses:
 //! the store pass's Gram update of one block (512 rows of 100 materials,
 //! `Y += Z_b^T Z_b`, lower triangle; a 100-material fit does 8 544 of
-//! them), and the optimiser's refactorisation (Cholesky and inverse of an
-//! N x N kernel matrix, N = 100 to 1000; about 1 700 per 100-material fit). faer is here for scale
+//! them), the optimiser's refactorisation (Cholesky and inverse of an
+//! N x N kernel matrix, N = 100 to 1000; about 1 700 per 100-material fit),
+//! and the N x N product of L-BFGS's gradient (`K^-1 Y K^-1`, two a cost
+//! evaluation) on one thread and on the default pool. faer is here for scale
 //! only: the library does not call it at run time (see the `dense`
 //! module).
 //!
@@ -12,6 +14,7 @@ use std::hint::black_box;
 
 use brdf_atlas_core::dense::Cholesky;
 use brdf_atlas_core::dense::gram::syrk_lower_add;
+use brdf_atlas_core::dense::product::matmul;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use faer::linalg::matmul::triangular::{self as tri, BlockStructure};
 use faer::linalg::solvers::DenseSolveCore;
@@ -91,9 +94,37 @@ fn refactorise(c: &mut Criterion) {
     g.finish();
 }
 
+fn product(c: &mut Criterion) {
+    let mut g = c.benchmark_group("product n x n");
+    for n in [200, 400, 1000] {
+        let (a, b) = (random(n * n), random(n * n));
+        let mut out = vec![0.0; n * n];
+        g.throughput(Throughput::Elements((n * n * n) as u64));
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        g.bench_with_input(
+            BenchmarkId::new("dense::product one thread", n),
+            &n,
+            |bch, &n| {
+                one.install(|| bch.iter(|| matmul(black_box(&mut out), &a, &b, n)));
+            },
+        );
+        g.bench_with_input(
+            BenchmarkId::new("dense::product default pool", n),
+            &n,
+            |bch, &n| {
+                bch.iter(|| matmul(black_box(&mut out), &a, &b, n));
+            },
+        );
+    }
+    g.finish();
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default().sample_size(20);
-    targets = gram, refactorise
+    targets = gram, refactorise, product
 }
 criterion_main!(benches);
