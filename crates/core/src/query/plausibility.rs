@@ -25,6 +25,7 @@ use crate::error::Result;
 use crate::model::Model;
 use crate::query::budget::{Budget, CLAMP_BUDGET, STEPS, convex_weights, counted};
 use crate::query::reconstruct::{Bands, Blend};
+use crate::simd::fold::{GROUPS, ordered_blocks_then};
 
 /// Rows a worker handles at once (fixed, so sums do not depend on the thread count).
 const CHUNK: usize = 4096;
@@ -130,27 +131,31 @@ impl Model {
                 let steps = self.plausible_steps(blend.weights(), &convex)?;
                 let dims = self.dims();
                 let per = dims.theta_d * dims.phi_d;
-                let banded = |steps: Vec<f64>| -> Result<Blend<'_>> {
-                    let blend = self.at(x)?;
-                    if steps.iter().all(|&t| t == 0.0) {
-                        return Ok(blend);
-                    }
+                let banded = |steps: Vec<f64>| {
                     let bands = Bands::new(blend.weights(), convex.clone(), steps, per);
-                    Ok(blend.with_bands(bands))
+                    blend.with_bands(bands)
+                };
+                let mut b = if steps.iter().all(|&t| t == 0.0) {
+                    None
+                } else {
+                    Some(banded(steps.clone()))
                 };
                 // No more light out than in: while the largest directional
                 // albedo is above 1 (or above the convex blend's, should the
                 // materials themselves exceed 1), every bin's step is raised
                 // to the next floor of STEPS.
-                let ceiling = self.max_albedo_of(&self.at_weights(&convex)).max(1.0);
-                let mut b = banded(steps.clone())?;
-                for &floor in &STEPS[1..] {
-                    if self.max_albedo_of(&b) <= ceiling {
-                        break;
+                let albedo =
+                    |b: &Option<Blend<'_>>| self.max_albedo_of(b.as_ref().unwrap_or(&blend));
+                if albedo(&b) > 1.0 {
+                    let ceiling = self.max_albedo_of(&self.at_weights(&convex)).max(1.0);
+                    for &floor in &STEPS[1..] {
+                        if albedo(&b) <= ceiling {
+                            break;
+                        }
+                        b = Some(banded(steps.iter().map(|&t| t.max(floor)).collect()));
                     }
-                    b = banded(steps.iter().map(|&t| t.max(floor)).collect())?;
                 }
-                Ok(b)
+                Ok(b.unwrap_or(blend))
             }
         }
     }
@@ -172,27 +177,27 @@ impl Model {
         let (bins, bands) = (dims.bins(), dims.theta_h);
         let cosines = self.cosine_products();
         let (gp, convex) = (self.at_weights(w), self.at_weights(v));
-        let parts: Vec<Budget> = (0..rows.div_ceil(CHUNK))
-            .into_par_iter()
-            .map_init(
-                || (vec![0.0; CHUNK], vec![0.0; CHUNK]),
-                |(tg, tc), k| {
-                    let r0 = k * CHUNK;
-                    let len = CHUNK.min(rows - r0);
-                    gp.transformed_rows(r0, &mut tg[..len]);
-                    convex.transformed_rows(r0, &mut tc[..len]);
-                    let mut budget = Budget::new(1, bands);
-                    for j in 0..len {
-                        let row = r0 + j;
-                        if let Some(form) = counted(store, self.transform(), row) {
-                            let (bin, t) = (row % bins, (&tg[j..=j], &tc[j..=j]));
-                            budget.add(dims.unbin(bin).0, t.0, t.1, form, cosines[bin]);
-                        }
+        // Fixed groups of chunks, folded in order: the same sums for any
+        // thread count, and 64 partial budgets (of every theta_h bin) at most.
+        let parts = ordered_blocks_then(
+            rows,
+            CHUNK,
+            GROUPS,
+            || (Budget::new(1, bands), vec![0.0; CHUNK], vec![0.0; CHUNK]),
+            |(budget, tg, tc), range| {
+                let (r0, len) = (range.start, range.len());
+                gp.transformed_rows(r0, &mut tg[..len]);
+                convex.transformed_rows(r0, &mut tc[..len]);
+                for j in 0..len {
+                    let row = r0 + j;
+                    if let Some(form) = counted(store, self.transform(), row) {
+                        let (bin, t) = (row % bins, (&tg[j..=j], &tc[j..=j]));
+                        budget.add(dims.unbin(bin).0, t.0, t.1, form, cosines[bin]);
                     }
-                    budget
-                },
-            )
-            .collect();
+                }
+            },
+            |(budget, _, _)| budget,
+        );
         let mut budget = Budget::new(1, bands);
         for p in &parts {
             budget.merge(p);

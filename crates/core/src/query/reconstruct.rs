@@ -223,11 +223,15 @@ impl<'m> Blend<'m> {
     }
 
     /// The same point with weights per `theta_h` bin (and a fresh memo).
-    pub(crate) fn with_bands(self, bands: Bands) -> Blend<'m> {
+    pub(crate) fn with_bands(&self, bands: Bands) -> Blend<'m> {
         Blend {
+            model: self.model,
+            x: self.x.clone(),
+            kernel: self.kernel.clone(),
+            gp: self.gp.clone(),
+            weights: self.weights.clone(),
             bands: Some(Box::new(bands)),
             memo: OnceLock::new(),
-            ..self
         }
     }
 
