@@ -91,6 +91,27 @@ fn reconstruct_json_is_the_blend_the_library_computes() {
                 !rec["moved"].is_null(),
                 "the test point must move the weights"
             );
+            // Without --json the report says the weights shown are the GP's
+            // and in how many theta_h bins the rule moved them.
+            let out = brdf_atlas([
+                "reconstruct".as_ref(),
+                model_path.as_os_str(),
+                "--at".as_ref(),
+                format!("{},{}", at[0], at[1]).as_ref(),
+                "--blend".as_ref(),
+                "plausible".as_ref(),
+                "-o".as_ref(),
+                out_path.as_os_str(),
+            ]);
+            let (stdout, stderr) = texts(&out);
+            assert!(out.status.success(), "{stderr}");
+            let steps = blend.steps().unwrap().1;
+            let moved = steps.iter().filter(|&&t| t > 0.0).count();
+            let wanted = format!(
+                "towards a convex blend in {moved} of {} theta_h bins",
+                steps.len()
+            );
+            assert!(stdout.contains(&wanted), "{stdout}");
         }
         assert_eq!(rec["blend"], rule.name());
         assert_eq!(rec["point"], serde_json::json!(at));

@@ -73,6 +73,17 @@ pub fn write(
         weights.len(),
         weights.iter().sum::<f64>()
     )?;
+    if let Some((_, steps)) = blend.steps() {
+        let moved: Vec<f64> = steps.iter().copied().filter(|&t| t > 0.0).collect();
+        writeln!(
+            report,
+            "  (the GP's weights: the {} rule moved them towards a convex blend in {} of {} theta_h bins, by steps up to {})",
+            rule.name(),
+            moved.len(),
+            steps.len(),
+            moved.iter().copied().fold(0.0, f64::max)
+        )?;
+    }
     let plausibility = blend.plausibility()?;
     let confidence = blend.confidence();
     writeln!(
