@@ -36,24 +36,25 @@ fn reconstruct_json_is_the_blend_the_library_computes() {
                 .is_some()
         })
         .expect("a point where the plausible rule moves the weights");
+    // `reconstruct` at `at` under `rule`, with `--json` or without; stdout.
+    let reconstruct = |rule: BlendRule, at: [f64; 2], json: bool| {
+        let out_path = tmp.path().join(format!("{}.binary", rule.name()));
+        let at = format!("{},{}", at[0], at[1]);
+        let mut args = vec!["reconstruct", model_path.to_str().unwrap(), "--at", &at];
+        args.extend(["--blend", rule.name(), "-o", out_path.to_str().unwrap()]);
+        if json {
+            args.push("--json");
+        }
+        let out = brdf_atlas(args);
+        let (stdout, stderr) = texts(&out);
+        assert!(out.status.success(), "{stderr}");
+        stdout
+    };
     for (rule, at) in [
         (BlendRule::Gp, [0.3, -0.45]),
         (BlendRule::Plausible, moving),
     ] {
-        let out_path = tmp.path().join(format!("{}.binary", rule.name()));
-        let out = brdf_atlas([
-            "reconstruct".as_ref(),
-            model_path.as_os_str(),
-            "--at".as_ref(),
-            format!("{},{}", at[0], at[1]).as_ref(),
-            "--blend".as_ref(),
-            rule.name().as_ref(),
-            "--json".as_ref(),
-            "-o".as_ref(),
-            out_path.as_os_str(),
-        ]);
-        let (stdout, stderr) = texts(&out);
-        assert!(out.status.success(), "{stderr}");
+        let stdout = reconstruct(rule, at, true);
         assert_eq!(stdout.lines().count(), 1, "one record: {stdout}");
         let rec: serde_json::Value = serde_json::from_str(&stdout).unwrap();
         let blend = model.at_with(&at, rule).unwrap();
@@ -93,18 +94,7 @@ fn reconstruct_json_is_the_blend_the_library_computes() {
             );
             // Without --json the report says the weights shown are the GP's
             // and in how many theta_h bins the rule moved them.
-            let out = brdf_atlas([
-                "reconstruct".as_ref(),
-                model_path.as_os_str(),
-                "--at".as_ref(),
-                format!("{},{}", at[0], at[1]).as_ref(),
-                "--blend".as_ref(),
-                "plausible".as_ref(),
-                "-o".as_ref(),
-                out_path.as_os_str(),
-            ]);
-            let (stdout, stderr) = texts(&out);
-            assert!(out.status.success(), "{stderr}");
+            let stdout = reconstruct(rule, at, false);
             let steps = blend.steps().unwrap().1;
             let moved = steps.iter().filter(|&&t| t > 0.0).count();
             let wanted = format!(
@@ -136,7 +126,7 @@ fn reconstruct_json_is_the_blend_the_library_computes() {
             blend.confidence().variance
         );
         // The file is the blend's table.
-        let written = MerlTable::read(&out_path).unwrap();
+        let written = MerlTable::read(tmp.path().join(format!("{}.binary", rule.name()))).unwrap();
         assert_eq!(written.raw(), blend.table().unwrap().raw());
     }
 }
