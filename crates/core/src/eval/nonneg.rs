@@ -1,14 +1,16 @@
-//! The leave-one-out predictor of [`crate::BlendRule::Plausible`]: each
+//! The leave-one-out predictions of [`crate::BlendRule::Plausible`]: each
 //! held-out material predicted as a reconstruction at its latent point
-//! would be, from the others (see [`crate::query::budget`]). `w` (the GP's) are moved towards the kernel's convex
-//! weights `v` (a kernel-weighted average of the materials, plausible by
-//! construction): `(1 - t) w + t v`, with the smallest `t` of [`STEPS`] for
-//! which the reflectance the clamp removes is at most [`CLAMP_BUDGET`] of
-//! the GP blend's cosine-weighted reflectance. Both are linear in the
+//! would be, from the others (see [`crate::query::budget`]). The GP's
+//! weights `w` move towards the kernel's convex weights `v` (a
+//! kernel-weighted average of the materials, plausible by construction):
+//! `w + t (v - w)`, with the smallest `t` of [`STEPS`] for which the
+//! reflectance the clamp removes is at most a budget's share of the
+//! reflectance: per `theta_h` bin, as the rule does ([`banded_steps`]), or
+//! for the whole table at once, the rule's earlier form, kept for
+//! comparison ([`plausible_predictors`]). Both blends are linear in the
 //! weights before the inverse transform, so one pass over the store gives
-//! the removed reflectance at every step: per row, the GP value `g` and the
-//! convex value `c`, and where `g < 0` the clamped part of
-//! `g + t (c - g)` for each `t`.
+//! the removed reflectance at every step: per row, the GP value `g`, the
+//! convex value `c`, and the clamped part of `g + t (c - g)` for each `t`.
 
 use faer::{Mat, MatRef};
 
@@ -40,11 +42,13 @@ pub fn convex_predictor(kernel: &Kernel, latent: MatRef<'_, f64>) -> Result<Mat<
     Ok(Mat::from_fn(n, n, |i, j| rows[i][j]))
 }
 
-/// The leave-one-out predictors of [`crate::BlendRule::Plausible`], one per
-/// clamp budget in `budgets`: row `i` is `(1 - t_i) P_i + t_i V_i` with `t_i`
-/// chosen as a reconstruction at material `i`'s latent point would choose
-/// it, from the others. One pass over the store for every budget. Returns
-/// each predictor with its steps `t`.
+/// The leave-one-out predictors of the plausible rule's earlier form, which
+/// moved the whole table by one step (kept to compare with
+/// [`banded_steps`]), one per clamp budget in `budgets`: row `i` is
+/// `(1 - t_i) P_i + t_i V_i` with the smallest `t_i` for which the clamp
+/// removes at most the budget's share of the whole prediction's
+/// reflectance. One pass over the store for every budget. Returns each
+/// predictor with its steps `t`.
 pub fn plausible_predictors(
     store: &Store,
     gp: MatRef<'_, f64>,
