@@ -363,3 +363,39 @@ fn hard_cases_stay_finite() {
         }
     }
 }
+
+#[test]
+fn many_points_in_one_pass_take_the_steps_each_takes_alone() {
+    let tmp = tempfile::tempdir().unwrap();
+    for transform in [TransformKind::Raw, TransformKind::Log] {
+        let m = Model::open(fit(tmp.path(), 12, transform)).unwrap();
+        // Enough points for the pass's matrix product (8 weight vectors and
+        // more), the test points among them.
+        let mut points: Vec<Vec<f64>> = POINTS.iter().map(|p| p.to_vec()).collect();
+        points.extend((0..11).map(|k| {
+            let a = k as f64 * 0.57;
+            vec![
+                1.3 * a.cos() * (0.2 + 0.07 * k as f64),
+                0.9 * (1.7 * a).sin(),
+            ]
+        }));
+        let together = m.plausible_blends(&points).unwrap();
+        assert_eq!(together.len(), points.len());
+        let mut moved = 0;
+        for (x, b) in points.iter().zip(&together) {
+            let alone = m.at_with(x, BlendRule::Plausible).unwrap();
+            assert_eq!(b.point(), x.as_slice());
+            let (got, want) = (b.steps(), alone.steps());
+            assert_eq!(
+                got.map(|s| s.1.to_vec()),
+                want.map(|s| s.1.to_vec()),
+                "{transform:?} {x:?}"
+            );
+            moved += usize::from(got.is_some());
+            for bin in (0..DIMS.bins()).step_by(89) {
+                assert_eq!(b.rgb(bin), alone.rgb(bin), "{transform:?} {x:?} bin {bin}");
+            }
+        }
+        assert!(moved > 0, "{transform:?}: no point moved the weights");
+    }
+}

@@ -30,6 +30,54 @@ pub const STEPS: [f64; 13] = [
     1.0,
 ];
 
+/// The reflectance `f(g + t (c - g))` of a row at each of [`STEPS`], from its
+/// GP value `g` and convex value `c` (transformed space) and its inverse
+/// transform. Under `e^t - 1` the thirteen exponentials are two, `e^g` and
+/// `r = e^((c - g) / 64)`, and powers of `r` by products (each step a whole
+/// number of 64ths): within a few ulps of the direct exponentials, which is
+/// far below any budget. `e^t - 1` cancels near `t = 0` to an absolute error
+/// of about 1e-16 s either way.
+#[inline]
+pub(crate) fn step_values(g: f64, c: f64, form: InverseForm) -> [f64; 13] {
+    let mut v = [0.0; 13];
+    match form {
+        InverseForm::Linear(s) => {
+            for (v, t) in v.iter_mut().zip(STEPS) {
+                *v = s * (g + t * (c - g));
+            }
+        }
+        InverseForm::Exp(s) => {
+            let (base, r) = (fastexp::exp(g), fastexp::exp((c - g) / 64.0));
+            // Powers by squaring: at most six products deep.
+            let r2 = r * r;
+            let r4 = r2 * r2;
+            let r8 = r4 * r4;
+            let r16 = r8 * r8;
+            let r32 = r16 * r16;
+            let r48 = r32 * r16;
+            let pows = [
+                1.0,
+                r,
+                r2,
+                r4,
+                r8,
+                r8 * r4,
+                r16,
+                r16 * r8,
+                r32,
+                r32 * r8,
+                r48,
+                r48 * r8,
+                r32 * r32,
+            ];
+            for (v, p) in v.iter_mut().zip(pows) {
+                *v = s * (base * p - 1.0);
+            }
+        }
+    }
+    v
+}
+
 /// The length scale of the convex blend the rule steps towards, as a
 /// share of the GP kernel's: 0.3, the best of 1, 0.3, 0.15 and 0.08 for the
 /// rule's leave-one-out error on the 100 NBRDF-derived materials
@@ -101,19 +149,39 @@ impl Budget {
             &mut self.total[band * self.n..(band + 1) * self.n],
             &mut self.clamped[band * self.n..(band + 1) * self.n],
         );
-        // `e^t - 1` through the vectorisable exp: its cancellation near
-        // t = 0 costs absolute error about 1e-16 s, far below any budget.
-        let f = |t: f64| match form {
-            InverseForm::Linear(s) => s * t,
-            InverseForm::Exp(s) => s * (fastexp::exp(t) - 1.0),
-        };
         for i in 0..g.len() {
-            for (k, t) in STEPS.iter().enumerate() {
-                let v = f(g[i] + t * (c[i] - g[i]));
-                total[i][k] += v.abs() * cos;
-                clamped[i][k] += (-v).max(0.0) * cos;
+            let v = step_values(g[i], c[i], form);
+            for k in 0..STEPS.len() {
+                total[i][k] += v[k].abs() * cos;
+                clamped[i][k] += (-v[k]).max(0.0) * cos;
             }
         }
+    }
+
+    /// [`Budget::add`] at step 0 alone: `g[i]` the GP value of material
+    /// `i` (the other steps' sums are left as they are).
+    #[inline]
+    pub(crate) fn add_at_zero(&mut self, band: usize, g: &[f64], form: InverseForm, cos: f64) {
+        let (total, clamped) = (
+            &mut self.total[band * self.n..(band + 1) * self.n],
+            &mut self.clamped[band * self.n..(band + 1) * self.n],
+        );
+        for i in 0..g.len() {
+            // `step_values(g, c, form)[0]`, bit for bit (`t = 0`, `r^0 = 1`).
+            let v = match form {
+                InverseForm::Linear(s) => s * g[i],
+                InverseForm::Exp(s) => s * (fastexp::exp(g[i]) - 1.0),
+            };
+            total[i][0] += v.abs() * cos;
+            clamped[i][0] += (-v).max(0.0) * cos;
+        }
+    }
+
+    /// Whether material `i` of band `band` meets `budget` at step 0 (the
+    /// test [`Budget::steps`] makes first).
+    pub(crate) fn within_at_zero(&self, band: usize, i: usize, budget: f64) -> bool {
+        let at = band * self.n + i;
+        self.clamped[at][0] <= budget * self.total[at][0]
     }
 
     /// Fold another partial sum in (call in a fixed order).
@@ -149,5 +217,40 @@ pub(crate) fn counted(store: &Store, transform: &dyn Transform, row: usize) -> O
     match transform.inverse_form(row % store.dims().bins()) {
         InverseForm::Exp(s) | InverseForm::Linear(s) if s == 0.0 => None,
         form => Some(form),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn step_values_are_the_blend_at_every_step() {
+        for (g, c) in [
+            (0.3, -0.2),
+            (-2.0, 4.5),
+            (7.0, 0.0),
+            (0.0, 0.0),
+            (-1e-9, 1e-9),
+            (1.2, 1.2),
+        ] {
+            for form in [InverseForm::Exp(0.8), InverseForm::Linear(1.7)] {
+                let v = step_values(g, c, form);
+                for (k, &t) in STEPS.iter().enumerate() {
+                    let b: f64 = g + t * (c - g);
+                    let want = match form {
+                        InverseForm::Exp(s) => s * b.exp_m1(),
+                        InverseForm::Linear(s) => s * b,
+                    };
+                    // Relative to e^b: `e^b - 1` cancels near b = 0.
+                    let scale = b.exp().max(1.0);
+                    assert!(
+                        (v[k] - want).abs() <= 1e-13 * scale,
+                        "{form:?} g {g} c {c} step {t}: {} vs {want}",
+                        v[k]
+                    );
+                }
+            }
+        }
     }
 }

@@ -16,6 +16,7 @@ pub mod reconstruct;
 pub mod render;
 pub mod sheet;
 mod sidecar;
+mod steps;
 pub mod swatch;
 mod view;
 

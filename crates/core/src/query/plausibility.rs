@@ -23,9 +23,7 @@ use serde::Serialize;
 use crate::data::transform::InverseForm;
 use crate::error::Result;
 use crate::model::Model;
-use crate::query::budget::{Budget, CLAMP_BUDGET, STEPS, convex_weights, counted};
-use crate::query::reconstruct::{Bands, Blend};
-use crate::simd::fold::{GROUPS, ordered_blocks_then};
+use crate::query::reconstruct::Blend;
 
 /// Rows a worker handles at once (fixed, so sums do not depend on the thread count).
 const CHUNK: usize = 4096;
@@ -122,88 +120,20 @@ impl Confidence {
 impl Model {
     /// The blend at `x` under `rule`.
     pub fn at_with(&self, x: &[f64], rule: BlendRule) -> Result<Blend<'_>> {
-        let blend = self.at(x)?;
         match rule {
-            BlendRule::Gp => Ok(blend),
+            BlendRule::Gp => self.at(x),
             BlendRule::Plausible => {
-                let latent = crate::gplvm::kernel::rows_of(self.latent().as_ref());
-                let convex = convex_weights(&latent, x, self.file().kernel.length_scale, None);
-                let steps = self.plausible_steps(blend.weights(), &convex)?;
-                let dims = self.dims();
-                let per = dims.theta_d * dims.phi_d;
-                let banded = |steps: Vec<f64>| {
-                    let bands = Bands::new(blend.weights(), convex.clone(), steps, per);
-                    blend.with_bands(bands)
-                };
-                let mut b = if steps.iter().all(|&t| t == 0.0) {
-                    None
-                } else {
-                    Some(banded(steps.clone()))
-                };
-                // No more light out than in: while the largest directional
-                // albedo is above 1 (or above the convex blend's, should the
-                // materials themselves exceed 1), every bin's step is raised
-                // to the next floor of STEPS.
-                let albedo =
-                    |b: &Option<Blend<'_>>| self.max_albedo_of(b.as_ref().unwrap_or(&blend));
-                if albedo(&b) > 1.0 {
-                    let ceiling = self.max_albedo_of(&self.at_weights(&convex)).max(1.0);
-                    for &floor in &STEPS[1..] {
-                        if albedo(&b) <= ceiling {
-                            break;
-                        }
-                        b = Some(banded(steps.iter().map(|&t| t.max(floor)).collect()));
-                    }
-                }
-                Ok(b.unwrap_or(blend))
+                let mut blends = self.plausible_blends(&[x.to_vec()])?;
+                Ok(blends.pop().expect("one blend a point"))
             }
         }
     }
 
     /// The largest directional albedo of a blend (point queries at the
     /// bins of the directional rule only).
-    fn max_albedo_of(&self, blend: &Blend<'_>) -> f64 {
+    pub(crate) fn max_albedo_of(&self, blend: &Blend<'_>) -> f64 {
         let rule = self.directional_rule();
-        largest(&rule.integrate(|b| blend.rgb(b).unwrap_or([0.0; 3]))).0
-    }
-
-    /// The steps of [`BlendRule::Plausible`] from weights `w` towards `v`,
-    /// one per `theta_h` bin: one pass over the store (see
-    /// [`crate::loo::STEPS`]).
-    fn plausible_steps(&self, w: &[f64], v: &[f64]) -> Result<Vec<f64>> {
-        let store = self.store();
-        let rows = store.rows();
-        let dims = self.dims();
-        let (bins, bands) = (dims.bins(), dims.theta_h);
-        let cosines = self.cosine_products();
-        let (gp, convex) = (self.at_weights(w), self.at_weights(v));
-        // Fixed groups of chunks, folded in order: the same sums for any
-        // thread count, and 64 partial budgets (of every theta_h bin) at most.
-        let parts = ordered_blocks_then(
-            rows,
-            CHUNK,
-            GROUPS,
-            || (Budget::new(1, bands), vec![0.0; CHUNK], vec![0.0; CHUNK]),
-            |(budget, tg, tc), range| {
-                let (r0, len) = (range.start, range.len());
-                gp.transformed_rows(r0, &mut tg[..len]);
-                convex.transformed_rows(r0, &mut tc[..len]);
-                for j in 0..len {
-                    let row = r0 + j;
-                    if let Some(form) = counted(store, self.transform(), row) {
-                        let (bin, t) = (row % bins, (&tg[j..=j], &tc[j..=j]));
-                        budget.add(dims.unbin(bin).0, t.0, t.1, form, cosines[bin]);
-                    }
-                }
-            },
-            |(budget, _, _)| budget,
-        );
-        let mut budget = Budget::new(1, bands);
-        for p in &parts {
-            budget.merge(p);
-        }
-        self.verify()?;
-        Ok(budget.steps(CLAMP_BUDGET))
+        largest(&rule.integrate(|b| blend.rgb_once(b).unwrap_or([0.0; 3]))).0
     }
 }
 
@@ -271,7 +201,7 @@ impl Blend<'_> {
         let share = |a: f64, b: f64| if b > 0.0 { a / b } else { 0.0 };
         let rule = model.directional_rule();
         let (max_albedo, max_albedo_incidence) =
-            largest(&rule.integrate(|b| self.rgb(b).unwrap_or([0.0; 3])));
+            largest(&rule.integrate(|b| self.rgb_once(b).unwrap_or([0.0; 3])));
         model.verify()?;
         Ok(Plausibility {
             clamped_reflectance: share(sum[0], sum[1]),

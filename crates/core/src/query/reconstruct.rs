@@ -312,6 +312,18 @@ impl<'m> Blend<'m> {
         ])
     }
 
+    /// [`Blend::rgb`] without the memo, for a one-off sweep over bins that
+    /// nothing asks for again (the albedo of a blend under test): the same
+    /// bits, without touching a fresh memo's pages.
+    pub(crate) fn rgb_once(&self, bin: usize) -> Option<[f64; 3]> {
+        let bins = self.model.dims().bins();
+        Some([
+            self.compute(bin, bins)?,
+            self.compute(bins + bin, bins)?,
+            self.compute(2 * bins + bin, bins)?,
+        ])
+    }
+
     /// RGB reflectance for a pair of directions (nearest bin, as MERL's own
     /// lookup); `None` below the horizon or where unmeasured.
     pub fn eval(&self, wi: Vec3, wo: Vec3) -> Option<[f64; 3]> {

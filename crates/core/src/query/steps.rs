@@ -1,0 +1,234 @@
+//! [`BlendRule::Plausible`](crate::BlendRule::Plausible) at many points in
+//! one pass over the store.
+//!
+//! The rule's steps need, for every point and `theta_h` bin, the blend's
+//! cosine-weighted reflectance and its clamped part at each of [`STEPS`]
+//! ([`Budget`]). Both the GP's blend and the convex one are linear in their
+//! weights, so a block of store rows times the `2m` weight vectors of `m`
+//! points is one matrix product: the store is read once however many points
+//! ask (a swatch sheet's 64, a map's nodes), not once a point.
+//!
+//! The pass runs over the `theta_h` bins in parallel, one task a bin (its
+//! rows of the three channels, in order), so every budget is summed in the
+//! same order whatever the thread count, and holds one bin's budgets per
+//! task, not one per thread.
+
+use rayon::prelude::*;
+
+use crate::data::store::Rows;
+use crate::dense::product::matmul;
+use crate::error::Result;
+use crate::gplvm::kernel::rows_of;
+use crate::model::Model;
+use crate::query::budget::{Budget, CLAMP_BUDGET, STEPS, convex_weights, counted};
+use crate::query::reconstruct::{Bands, Blend};
+use crate::simd::dot;
+
+/// Store rows a step of the pass multiplies at once.
+const BLOCK: usize = 480;
+
+/// Below this many weight vectors a block's values are formed vector by
+/// vector ([`dot::rows`]); from it on, by one matrix product (whose register
+/// tiles take 8 vectors at once).
+const PRODUCT_COLUMNS: usize = 8;
+
+/// A worker's buffers, kept between tasks (a fresh allocation a task would
+/// map and unmap pages each time, and every unmap interrupts the other cores).
+#[derive(Default)]
+struct Scratch {
+    /// A block of store rows in f64.
+    z64: Vec<f64>,
+    /// Its values under every weight vector.
+    t64: Vec<f64>,
+    /// One blend's values of the block.
+    row_values: Vec<f64>,
+}
+
+thread_local! {
+    static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch::default());
+}
+
+impl Model {
+    /// The blends of [`BlendRule::Plausible`](crate::BlendRule::Plausible)
+    /// at `points` (each `q` finite coordinates), in order: one pass over
+    /// the store for the steps of all of them, then each point's albedo
+    /// floor (point queries at the bins of the directional rule).
+    pub fn plausible_blends(&self, points: &[Vec<f64>]) -> Result<Vec<Blend<'_>>> {
+        let latent = rows_of(self.latent().as_ref());
+        let l = self.file().kernel.length_scale;
+        let gps = points
+            .iter()
+            .map(|x| self.at(x))
+            .collect::<Result<Vec<_>>>()?;
+        let convex: Vec<Vec<f64>> = points
+            .iter()
+            .map(|x| convex_weights(&latent, x, l, None))
+            .collect();
+        let steps = self.plausible_steps(&gps, &convex)?;
+        Ok(gps
+            .into_par_iter()
+            .zip(convex)
+            .zip(steps)
+            .map(|((gp, v), t)| self.floored(gp, v, t))
+            .collect())
+    }
+
+    /// The steps of [`BlendRule::Plausible`](crate::BlendRule::Plausible)
+    /// from each GP blend towards its convex weights, one per `theta_h` bin
+    /// (`result[point][bin]`).
+    ///
+    /// A bin whose GP blend the clamp leaves within budget takes step 0
+    /// whatever the other steps would give, so each bin is read twice at
+    /// most: once for the GP blends alone at step 0, and once more, for the
+    /// points over budget only, for every step. The sums are the same either
+    /// way (the same rows in the same order), and so are the steps.
+    fn plausible_steps(&self, gps: &[Blend<'_>], convex: &[Vec<f64>]) -> Result<Vec<Vec<f64>>> {
+        let m = gps.len();
+        if m == 0 {
+            return Ok(Vec::new());
+        }
+        self.store().verify_cheap()?;
+        let dims = self.dims();
+        let gp_weights: Vec<&[f64]> = gps.iter().map(|b| b.gp_weights()).collect();
+        let by_band: Vec<Vec<f64>> = (0..dims.theta_h)
+            .into_par_iter()
+            .map(|band| {
+                SCRATCH.with_borrow_mut(|s| {
+                    let mut steps = vec![0.0; m];
+                    // Step 0 only, every point.
+                    let at_zero = self.band_budget(band, &gp_weights, None, s);
+                    let over: Vec<usize> = (0..m)
+                        .filter(|&j| !at_zero.within_at_zero(0, j, CLAMP_BUDGET))
+                        .collect();
+                    if over.is_empty() {
+                        return steps;
+                    }
+                    // Every step, the points over budget.
+                    let w: Vec<&[f64]> = over.iter().map(|&j| gp_weights[j]).collect();
+                    let v: Vec<&[f64]> = over.iter().map(|&j| convex[j].as_slice()).collect();
+                    let full = self.band_budget(band, &w, Some(&v), s);
+                    let full_steps = full.steps(CLAMP_BUDGET);
+                    for (k, &j) in over.iter().enumerate() {
+                        steps[j] = full_steps[k];
+                    }
+                    steps
+                })
+            })
+            .collect();
+        self.verify()?;
+        Ok((0..m)
+            .map(|j| by_band.iter().map(|s| s[j]).collect())
+            .collect())
+    }
+
+    /// The budget of `theta_h` bin `band` for blends with GP weights `w`
+    /// and, given `v` (their convex weights), at every step of [`STEPS`];
+    /// without `v`, at step 0 alone (the other steps' sums stay 0).
+    fn band_budget(
+        &self,
+        band: usize,
+        w: &[&[f64]],
+        v: Option<&[&[f64]]>,
+        s: &mut Scratch,
+    ) -> Budget {
+        let store = self.store();
+        let (n, dims) = (store.n(), self.dims());
+        let (bins, per) = (dims.bins(), dims.theta_d * dims.phi_d);
+        let (cosines, mean) = (self.cosine_products(), store.mean());
+        let m = w.len();
+        let columns: Vec<&[f64]> = w.iter().chain(v.into_iter().flatten()).copied().collect();
+        // `A` (p x n, column-major) for the product path, padded with zero
+        // vectors to whole register tiles of 8 (the product's edge rows
+        // take a slower path).
+        let p = if columns.len() >= PRODUCT_COLUMNS {
+            columns.len().next_multiple_of(8)
+        } else {
+            columns.len()
+        };
+        let a: Vec<f64> = if p >= PRODUCT_COLUMNS {
+            let columns = &columns;
+            (0..n)
+                .flat_map(|t| (0..p).map(move |j| columns.get(j).map_or(0.0, |c| c[t])))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let mut budget = Budget::new(m, 1);
+        for c in 0..3 {
+            let start = c * bins + band * per;
+            for r0 in (start..start + per).step_by(BLOCK) {
+                let range = r0..(r0 + BLOCK).min(start + per);
+                let len = range.len();
+                s.t64.resize(p * len, 0.0);
+                if p < PRODUCT_COLUMNS {
+                    s.row_values.resize(len, 0.0);
+                    for (j, col) in columns.iter().enumerate() {
+                        let out = &mut s.row_values[..len];
+                        match store.z() {
+                            Rows::F32(z) => dot::rows(col, &z[r0 * n..], &mean[r0..], out),
+                            Rows::F64(z) => dot::rows(col, &z[r0 * n..], &mean[r0..], out),
+                        }
+                        for (k, value) in out.iter().enumerate() {
+                            s.t64[k * p + j] = *value;
+                        }
+                    }
+                } else {
+                    s.z64.resize(n * len, 0.0);
+                    match store.z() {
+                        Rows::F32(z) => s.z64[..n * len]
+                            .iter_mut()
+                            .zip(&z[r0 * n..range.end * n])
+                            .for_each(|(o, v)| *o = f64::from(*v)),
+                        Rows::F64(z) => s.z64[..n * len].copy_from_slice(&z[r0 * n..range.end * n]),
+                    }
+                    matmul(&mut s.t64[..p * len], &a, &s.z64[..n * len], n);
+                    for (k, row) in range.clone().enumerate() {
+                        s.t64[k * p..(k + 1) * p]
+                            .iter_mut()
+                            .for_each(|t| *t += mean[row]);
+                    }
+                }
+                for (k, row) in range.enumerate() {
+                    if let Some(form) = counted(store, self.transform(), row) {
+                        let t = &s.t64[k * p..(k + 1) * p];
+                        let cos = cosines[row % bins];
+                        match v {
+                            Some(_) => budget.add(0, &t[..m], &t[m..2 * m], form, cos),
+                            None => budget.add_at_zero(0, &t[..m], form, cos),
+                        }
+                    }
+                }
+            }
+        }
+        budget
+    }
+
+    /// The GP blend `gp` moved by `steps` towards `convex`, with the albedo
+    /// floor of [`BlendRule::Plausible`](crate::BlendRule::Plausible): while
+    /// the largest directional albedo is above 1 (or above the convex
+    /// blend's, should the materials themselves exceed 1), every bin's step
+    /// is raised to the next floor of [`STEPS`].
+    fn floored<'m>(&'m self, gp: Blend<'m>, convex: Vec<f64>, steps: Vec<f64>) -> Blend<'m> {
+        let per = self.dims().theta_d * self.dims().phi_d;
+        let banded = |steps: Vec<f64>| {
+            let bands = Bands::new(gp.gp_weights(), convex.clone(), steps, per);
+            gp.with_bands(bands)
+        };
+        let mut b = if steps.iter().all(|&t| t == 0.0) {
+            None
+        } else {
+            Some(banded(steps.clone()))
+        };
+        let albedo = |b: &Option<Blend<'_>>| self.max_albedo_of(b.as_ref().unwrap_or(&gp));
+        if albedo(&b) > 1.0 {
+            let ceiling = self.max_albedo_of(&self.at_weights(&convex)).max(1.0);
+            for &floor in &STEPS[1..] {
+                if albedo(&b) <= ceiling {
+                    break;
+                }
+                b = Some(banded(steps.iter().map(|&t| t.max(floor)).collect()));
+            }
+        }
+        b.unwrap_or(gp)
+    }
+}
