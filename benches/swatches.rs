@@ -10,8 +10,8 @@ mod common;
 use std::hint::black_box;
 
 use brdf_atlas_core::swatch::DEFAULT_LIGHTS;
+use brdf_atlas_core::{BlendRule, View, fit_dir, sheet};
 use brdf_atlas_core::{FitOptions, GplvmParams, Model, NoProgress, Precision, TransformKind};
-use brdf_atlas_core::{View, fit_dir, sheet};
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn swatches(c: &mut Criterion) {
@@ -35,8 +35,15 @@ fn swatches(c: &mut Criterion) {
     g.sample_size(10);
     g.bench_function("sheet_8x8_128px", |b| {
         b.iter(|| {
-            let s = sheet::swatches(&model, black_box(&points), None, 128, &DEFAULT_LIGHTS)
-                .expect("swatches");
+            let s = sheet::swatches(
+                &model,
+                black_box(&points),
+                None,
+                128,
+                &DEFAULT_LIGHTS,
+                BlendRule::Gp,
+            )
+            .expect("swatches");
             sheet::compose(&s, 8)
         })
     });

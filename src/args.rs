@@ -81,7 +81,7 @@ pub struct ModelPoint {
 }
 
 /// Parse a blend rule name.
-fn blend_rule(text: &str) -> Result<BlendRule, String> {
+pub(crate) fn blend_rule(text: &str) -> Result<BlendRule, String> {
     BlendRule::parse(text).ok_or_else(|| format!("expected gp or plausible, got {text:?}"))
 }
 

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use brdf_atlas_core::swatch::{DEFAULT_LIGHTS, Light};
-use brdf_atlas_core::{Model, View, sheet};
+use brdf_atlas_core::{BlendRule, Model, View, sheet};
 use brdf_atomic::commit_all;
 
 use crate::args;
@@ -56,6 +56,11 @@ pub struct Args {
     /// key (-0.45,0.55,0.7,0.9) and fill (0.75,-0.1,0.65,0.3).
     #[arg(long = "light", value_name = "X,Y,Z,E", value_parser = light, allow_hyphen_values = true)]
     pub lights: Vec<Light>,
+    /// How each sphere's material is formed, as `reconstruct --blend`:
+    /// `gp` or `plausible` (the plausible rule's steps for every sphere in
+    /// one pass over the store).
+    #[arg(long, value_name = "RULE", default_value = "gp", value_parser = args::blend_rule)]
+    pub blend: BlendRule,
 }
 
 /// `--view`'s help, with the core's default view.
@@ -147,7 +152,7 @@ pub fn run(args: &Args) -> Result<ExitCode, Error> {
     };
     let t0 = Instant::now();
     let size = args.size as usize;
-    let spheres = sheet::swatches(&model, &points, names.as_deref(), size, lights)?;
+    let spheres = sheet::swatches(&model, &points, names.as_deref(), size, lights, args.blend)?;
     let laid = sheet::compose(&spheres, columns);
     let elapsed = t0.elapsed();
     let mut staged = vec![sheet::stage_png(&args.png, &laid)?];
@@ -158,8 +163,9 @@ pub fn run(args: &Args) -> Result<ExitCode, Error> {
     let mut out = io::stdout().lock();
     writeln!(
         out,
-        "{} spheres of {size} px from {} under {} light(s), {}",
+        "{} spheres of {size} px ({} blend) from {} under {} light(s), {}",
         points.len(),
+        args.blend.name(),
         model.path().display(),
         lights.len(),
         secs(elapsed)

@@ -3,8 +3,8 @@
 //! from the MERL file of that point's reconstruction.
 
 use brdf_atlas_core::swatch::{Light, render};
+use brdf_atlas_core::{BlendRule, fit_dir, sheet};
 use brdf_atlas_core::{FitOptions, GplvmParams, Model, NoProgress, Precision, TransformKind};
-use brdf_atlas_core::{fit_dir, sheet};
 use brdf_merl::table::raw_from_physical;
 use brdf_merl::{Dims, MerlTable, synth};
 
@@ -93,7 +93,7 @@ fn a_sphere_from_point_queries_equals_the_one_from_the_reconstructed_file() {
     let points = sheet::grid_points(&view, 3);
     assert_eq!(points.len(), 9);
     assert!(points[0][0] < points[1][0] && points[0][1] > points[3][1]);
-    let spheres = sheet::swatches(&model, &points[..2], None, 16, &lights).unwrap();
+    let spheres = sheet::swatches(&model, &points[..2], None, 16, &lights, BlendRule::Gp).unwrap();
     assert_eq!(
         spheres[0].lines,
         [format!("({:.2}, {:.2})", points[0][0], points[0][1])]
@@ -101,4 +101,36 @@ fn a_sphere_from_point_queries_equals_the_one_from_the_reconstructed_file() {
     let laid = sheet::compose(&spheres, 2);
     assert_eq!(laid.srgb8.len(), 3 * laid.width * laid.height);
     assert!(laid.width >= 32 && laid.height >= 16);
+}
+
+#[test]
+fn plausible_swatches_are_the_spheres_of_the_plausible_reconstructions() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    synth::write_dir(&data, 10, Dims::new(12, 12, 24).unwrap(), 7).unwrap();
+    let path = dir.path().join("m.atlas");
+    let options = FitOptions {
+        params: GplvmParams::new(2).check().unwrap(),
+        transform: TransformKind::Log,
+        precision: Precision::F64,
+    };
+    fit_dir(&data, &path, &options, &NoProgress).unwrap();
+    let model = Model::open(&path).unwrap();
+    let lights = brdf_atlas_core::swatch::DEFAULT_LIGHTS;
+    let points = sheet::grid_points(&brdf_atlas_core::View::default(), 3);
+    let sheet = sheet::swatches(&model, &points, None, 24, &lights, BlendRule::Plausible).unwrap();
+    let mut differ = 0;
+    for (p, s) in points.iter().zip(&sheet) {
+        let alone = model.at_with(p, BlendRule::Plausible).unwrap();
+        let merl = dir.path().join("there.binary");
+        alone.table().unwrap().write(&merl).unwrap();
+        assert_eq!(
+            s.sphere,
+            render(&MerlTable::read(&merl).unwrap(), 24, &lights),
+            "{p:?}"
+        );
+        differ += usize::from(s.sphere != render(&model.at(p).unwrap(), 24, &lights));
+    }
+    // The rule changed some of the spheres (else this compared GP spheres).
+    assert!(differ > 0);
 }

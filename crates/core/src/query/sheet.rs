@@ -10,6 +10,7 @@ use brdf_atomic::{PendingFile, stage};
 
 use crate::error::{CoreError, Result};
 use crate::model::Model;
+use crate::query::BlendRule;
 use crate::query::map::View;
 use crate::query::paint::{Canvas, srgb, text_size};
 use crate::query::swatch::{Light, Sphere, render, tone};
@@ -38,7 +39,9 @@ pub fn grid_points(view: &View, grid: usize) -> Vec<[f64; 2]> {
         .collect()
 }
 
-/// Render the spheres of `model` at `points` (labelled `names`, if given).
+/// Render the spheres of `model` at `points` (labelled `names`, if given),
+/// the material at each point formed by `rule` (the plausible rule's steps
+/// for all points in one pass over the store).
 /// [`CoreError::FileChanged`] if the store changed meanwhile.
 pub fn swatches(
     model: &Model,
@@ -46,11 +49,20 @@ pub fn swatches(
     names: Option<&[String]>,
     size: usize,
     lights: &[Light],
+    rule: BlendRule,
 ) -> Result<Vec<Swatch>> {
+    let blends = match rule {
+        BlendRule::Gp => points
+            .iter()
+            .map(|p| model.at(p))
+            .collect::<Result<Vec<_>>>()?,
+        BlendRule::Plausible => {
+            model.plausible_blends(&points.iter().map(|p| p.to_vec()).collect::<Vec<_>>())?
+        }
+    };
     let mut out = Vec::with_capacity(points.len());
-    for (k, p) in points.iter().enumerate() {
-        let blend = model.at(p)?;
-        let sphere = render(&blend, size, lights);
+    for (k, (p, blend)) in points.iter().zip(&blends).enumerate() {
+        let sphere = render(blend, size, lights);
         let mut lines: Vec<String> = names.map(|n| vec![n[k].clone()]).unwrap_or_default();
         lines.push(format!("({:.2}, {:.2})", p[0], p[1]));
         out.push(Swatch {
