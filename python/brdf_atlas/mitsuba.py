@@ -15,6 +15,10 @@ Properties:
   commas or blanks) for any;
 - or ``filename`` (string): a MERL ``.binary`` file, evaluated directly
   (the same nearest-bin lookup);
+- ``blend`` (string, optional, with ``model``): ``"gp"`` (default: the
+  GP's weights) or ``"plausible"`` (the plausible rule's, which keeps the
+  material non-negative and its albedo at most 1; one pass over the model's
+  store when the scene loads, none per ray);
 - ``sampling`` (string, optional): ``"tabulated"`` (default: a table of
   the material's own lobe mixed with 10% cosine sampling) or ``"cosine"``.
 
@@ -66,6 +70,8 @@ def _material(props):
     if has("filename"):
         if has("model"):
             raise InputError("brdf_atlas BSDF: give either 'model' or 'filename', not both")
+        if has("blend"):
+            raise InputError("brdf_atlas BSDF: 'blend' applies to a 'model', not to a 'filename'")
         return Material.from_merl(str(props["filename"])), str(props["filename"])
     if not has("model"):
         raise InputError(
@@ -87,7 +93,9 @@ def _material(props):
         raise InputError(
             f"brdf_atlas BSDF: {path}: expected the latent point as 'x' and 'y', or 'latent'"
         )
-    return model.material(x), f"{path} at {x}"
+    blend = str(props.get("blend", "gp")) if has("blend") else "gp"
+    label = f"{path} at {x}" if blend == "gp" else f"{path} at {x} ({blend} blend)"
+    return model.material(x, blend=blend), label
 
 
 def _bsdf_class(mi, dr):

@@ -63,9 +63,18 @@ impl Location {
 }
 
 impl PyModel {
-    fn blend(&self, x: &[f64]) -> Result<OwnedBlend> {
-        Ok(OwnedBlend::try_new(self.inner.clone(), |m| m.at(x))?)
+    fn blend(&self, x: &[f64], rule: BlendRule) -> Result<OwnedBlend> {
+        Ok(OwnedBlend::try_new(self.inner.clone(), |m| m.at_with(x, rule))?)
     }
+}
+
+/// The blend rule named `blend`: "gp" or "plausible".
+fn rule_of(blend: &str) -> PyResult<BlendRule> {
+    Ok(BlendRule::parse(blend).ok_or_else(|| {
+        Failure::input(format!(
+            "blend rule {blend:?}: expected \"gp\" or \"plausible\""
+        ))
+    })?)
 }
 
 /// Files made for `locate` from arrays, so that each has its own name.
@@ -191,11 +200,7 @@ impl PyModel {
         blend: &str,
     ) -> PyResult<Bound<'py, PyDict>> {
         let x = point(x)?;
-        let rule = BlendRule::parse(blend).ok_or_else(|| {
-            Failure::input(format!(
-                "blend rule {blend:?}: expected \"gp\" or \"plausible\""
-            ))
-        })?;
+        let rule = rule_of(blend)?;
         let p = py.detach(|| {
             let b = self.inner.at_with(&x, rule)?;
             Ok::<_, Failure>(b.plausibility()?)
@@ -210,28 +215,36 @@ impl PyModel {
     }
 
     /// The material at `x`, for repeated queries (it remembers the bins it
-    /// has reconstructed) and sampling.
-    fn material(&self, x: &Bound<'_, PyAny>) -> PyResult<PyMaterial> {
-        let x = point(x)?;
-        let label = format!("at {x:?} of {}", self.inner.path().display());
-        Ok(PyMaterial::new(Source::Blend(self.blend(&x)?), label))
+    /// has reconstructed) and sampling. `blend`: "gp" (the GP's weights,
+    /// the default) or "plausible" (the plausible rule's: one pass over the
+    /// store when the material is made, none per query).
+    #[pyo3(signature = (x, blend = "gp"))]
+    fn material(&self, py: Python<'_>, x: &Bound<'_, PyAny>, blend: &str) -> PyResult<PyMaterial> {
+        let (x, rule) = (point(x)?, rule_of(blend)?);
+        let label = match rule {
+            BlendRule::Gp => format!("at {x:?} of {}", self.inner.path().display()),
+            rule => format!("at {x:?} of {} ({} blend)", self.inner.path().display(), rule.name()),
+        };
+        let b = py.detach(|| self.blend(&x, rule))?;
+        Ok(PyMaterial::new(Source::Blend(b), label))
     }
 
     /// The whole table at `x`, shape (3, n_theta_h, n_theta_d, n_phi_d)
     /// (channel, then MERL's theta_h, theta_d, phi_d): reflectance in 1/sr
     /// with NaN where no material was measured, or with `raw=True` the
     /// values `brdf-atlas reconstruct` writes (MERL's channel scales not
-    /// applied, -1 where unmeasured).
-    #[pyo3(signature = (x, raw = false))]
+    /// applied, -1 where unmeasured). `blend` as for `material`.
+    #[pyo3(signature = (x, raw = false, blend = "gp"))]
     fn table<'py>(
         &self,
         py: Python<'py>,
         x: &Bound<'py, PyAny>,
         raw: bool,
+        blend: &str,
     ) -> PyResult<Bound<'py, PyArray4<f64>>> {
-        let x = point(x)?;
+        let (x, rule) = (point(x)?, rule_of(blend)?);
         let t = py.detach(|| {
-            let t = self.inner.at(&x)?.table()?;
+            let t = self.inner.at_with(&x, rule)?.table()?;
             Ok::<_, Failure>((t.dims(), table_values(&t, raw)))
         })?;
         Ok(table_array(py, t))
@@ -241,15 +254,18 @@ impl PyModel {
     /// of shape (n, 3), float32 or float64 (read in place), in the local
     /// frame (z is the normal; need not be normalised). Returns (n, 3)
     /// float64, zero where a direction is at or below the horizon or the bin
-    /// was never measured; the nearest bin, as `brdf-atlas eval`.
+    /// was never measured; the nearest bin, as `brdf-atlas eval`. `blend`
+    /// as for `material`.
+    #[pyo3(signature = (x, wi, wo, blend = "gp"))]
     fn eval<'py>(
         &self,
         py: Python<'py>,
         x: &Bound<'py, PyAny>,
         wi: &Bound<'py, PyAny>,
         wo: &Bound<'py, PyAny>,
+        blend: &str,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let x = point(x)?;
+        let (x, rule) = (point(x)?, rule_of(blend)?);
         let (wi, wo) = (
             Directions::extract(wi, "wi")?,
             Directions::extract(wo, "wo")?,
@@ -257,7 +273,7 @@ impl PyModel {
         let (vi, vo) = (wi.view(), wo.view());
         let out = py.detach(|| {
             check_pairs(vi, vo)?;
-            let source = Source::Blend(self.blend(&x)?);
+            let source = Source::Blend(self.blend(&x, rule)?);
             let out = eval_pairs(&source, vi, vo);
             source.verify()?;
             Ok::<_, Failure>(out)

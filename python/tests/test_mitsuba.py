@@ -97,3 +97,24 @@ def test_bad_plugin_properties(log_model):
     with pytest.raises(Exception, match="sampling = 'mis'"):
         mi.load_dict({"type": "brdf_atlas", "model": str(log_model.path), "x": 0.0, "y": 0.0,
                       "sampling": "mis"})
+
+
+@pytest.mark.parametrize("variant", VARIANTS)
+def test_a_plausible_point_renders_as_the_file_reconstruct_writes(log_model, cli, tmp_path, variant):
+    import subprocess
+    x = [0.9, -0.95]
+    # The rule moves this point's weights (else this compares GP materials).
+    assert not np.array_equal(log_model.table(x, blend="plausible"), log_model.table(x))
+    out = tmp_path / "plausible.binary"
+    subprocess.run([str(cli), "reconstruct", str(log_model.path), "--at", f"{x[0]!r},{x[1]!r}",
+                    "--blend", "plausible", "-o", str(out)], check=True, capture_output=True)
+    use(variant)
+    spp = 16 if variant.startswith("scalar") else 64
+    view = (0.0, -0.8, 0.6)
+    bsdf = {"type": "brdf_atlas", "model": str(log_model.path), "x": x[0], "y": x[1]}
+    plausible, _ = render(dict(bsdf, blend="plausible"), spp=spp, seed=3, view=view)
+    from_file, _ = render({"type": "brdf_atlas", "filename": str(out)}, spp=spp, seed=3, view=view)
+    # The same samples of the same values (the file rounds them to MERL's doubles).
+    assert np.allclose(plausible, from_file, rtol=1e-6, atol=0), (plausible, from_file)
+    with pytest.raises(Exception, match='blend rule "convex"'):
+        mi.load_dict(dict(bsdf, blend="convex"))

@@ -178,3 +178,21 @@ def test_plausibility_and_confidence_equal_the_cli_record(log_model, cli, tmp_pa
     assert far["low"] and far["variance"] > 0.999 and abs(far["weight_sum"]) < 1e-6
     with pytest.raises(ba.Error, match="blend rule"):
         log_model.plausibility(x, blend="convex")
+
+
+def test_plausible_queries_agree_with_each_other_and_the_cli(log_model, cli, tmp_path):
+    x = [0.9, -0.95]
+    angles = angle_pairs(300, 11)
+    wi, wo = direction(angles[:, 0], angles[:, 1]), direction(angles[:, 2], angles[:, 3])
+    material = log_model.material(x, blend="plausible")
+    assert "plausible" in repr(material)
+    assert np.array_equal(log_model.eval(x, wi, wo, blend="plausible"), material.eval(wi, wo))
+    # The file reconstruct writes holds the same values.
+    out = tmp_path / "plausible.binary"
+    subprocess.run([str(cli), "reconstruct", str(log_model.path), "--at", f"{x[0]!r},{x[1]!r}",
+                    "--blend", "plausible", "-o", str(out)], check=True, capture_output=True)
+    raw = log_model.table(x, raw=True, blend="plausible")
+    assert np.array_equal(raw, ba.Material.from_merl(out).table(raw=True))
+    assert not np.array_equal(raw, log_model.table(x, raw=True))
+    with pytest.raises(ba.Error, match="blend rule"):
+        log_model.material(x, blend="convex")
