@@ -145,6 +145,16 @@ public:
         return table;
     }
 
+    /// The table at (x, y) under blend rule `blend` (BRDF_ATLAS_BLEND_GP,
+    /// as reconstruct(x, y), or BRDF_ATLAS_BLEND_PLAUSIBLE: one more pass
+    /// over the store).
+    std::vector<double> reconstruct(double x, double y, std::int32_t blend) const {
+        std::vector<double> table(table_len());
+        check(brdf_atlas_model_reconstruct_with(handle_, x, y, blend, table.data(), table.size(),
+                                                nullptr));
+        return table;
+    }
+
     /// The table at (x, y) into a caller buffer of `len` doubles.
     void reconstruct_into(double x, double y, double *buf, std::size_t len) const {
         check(brdf_atlas_model_reconstruct(handle_, x, y, buf, len, nullptr));

@@ -18,6 +18,7 @@
 // Environment: BRDF_ATLAS_TEST_MODEL (a 2-D model file, required),
 // BRDF_ATLAS_ARTEFACTS (directory for the screenshot; default ".").
 // Run with QT_QPA_PLATFORM=offscreen on a machine without a display.
+#include <QCheckBox>
 #include <QDir>
 #include <QFile>
 #include <QLabel>
@@ -38,7 +39,8 @@
 namespace {
 
 // The C library's own answer at (x, y), through a handle of its own.
-std::vector<double> referenceTable(const QString &model, double x, double y) {
+std::vector<double> referenceTable(const QString &model, double x, double y,
+                                   std::int32_t blend = BRDF_ATLAS_BLEND_GP) {
     BrdfAtlasModel *h = nullptr;
     if (brdf_atlas_model_open(model.toUtf8().constData(), &h) != BRDF_ATLAS_STATUS_OK) {
         qFatal("brdf_atlas_model_open: %s", brdf_atlas_last_error_message());
@@ -47,7 +49,9 @@ std::vector<double> referenceTable(const QString &model, double x, double y) {
     brdf_atlas_model_table_len(h, &len);
     std::vector<double> t(len);
     std::size_t written = 0;
-    const BrdfAtlasStatus s = brdf_atlas_model_reconstruct(h, x, y, t.data(), t.size(), &written);
+    const BrdfAtlasStatus s = blend == BRDF_ATLAS_BLEND_GP
+                                  ? brdf_atlas_model_reconstruct(h, x, y, t.data(), t.size(), &written)
+                                  : brdf_atlas_model_reconstruct_with(h, x, y, blend, t.data(), t.size(), &written);
     if (s != BRDF_ATLAS_STATUS_OK || written != len) {
         qFatal("brdf_atlas_model_reconstruct: %s", brdf_atlas_last_error_message());
     }
@@ -62,13 +66,14 @@ QByteArray readAll(const QString &path) {
 }
 
 // The C library's plausibility at (x, y), through a handle of its own.
-BrdfAtlasPlausibility referencePlausibility(const QString &model, double x, double y) {
+BrdfAtlasPlausibility referencePlausibility(const QString &model, double x, double y,
+                                            std::int32_t blend = BRDF_ATLAS_BLEND_GP) {
     BrdfAtlasModel *h = nullptr;
     if (brdf_atlas_model_open(model.toUtf8().constData(), &h) != BRDF_ATLAS_STATUS_OK) {
         qFatal("brdf_atlas_model_open: %s", brdf_atlas_last_error_message());
     }
     BrdfAtlasPlausibility p{};
-    if (brdf_atlas_model_plausibility(h, x, y, BRDF_ATLAS_BLEND_GP, &p) != BRDF_ATLAS_STATUS_OK) {
+    if (brdf_atlas_model_plausibility(h, x, y, blend, &p) != BRDF_ATLAS_STATUS_OK) {
         qFatal("brdf_atlas_model_plausibility: %s", brdf_atlas_last_error_message());
     }
     brdf_atlas_model_free(h);
@@ -108,9 +113,9 @@ private:
 
     // The panel's plausibility line states what the library says at the
     // marker: the same numbers, the verdict and its colour, low confidence.
-    void checkPlausibilityShown(AtlasPanel *panel) {
+    void checkPlausibilityShown(AtlasPanel *panel, std::int32_t blend = BRDF_ATLAS_BLEND_GP) {
         const QPointF m = panel->mapView()->marker();
-        const BrdfAtlasPlausibility want = referencePlausibility(modelPath_, m.x(), m.y());
+        const BrdfAtlasPlausibility want = referencePlausibility(modelPath_, m.x(), m.y(), blend);
         const AtlasReconstruction &r = panel->lastReconstruction();
         QCOMPARE(r.x, m.x());
         QCOMPARE(r.y, m.y());
@@ -291,6 +296,37 @@ private slots:
         const QString error = validateBetweenMaterials(panel_);
         QVERIFY2(error.isEmpty(), qPrintable(error));
         checkPlausibilityShown(panel_);
+    }
+
+    void plausibleBoxValidatesThePlausibleRule() {
+        // A point where the rule moves the GP's weights, so that the two
+        // tables differ: beyond one material, away from another.
+        const QVector<QPointF> pts = view_->materialPoints();
+        QPointF at;
+        bool found = false;
+        for (int i = 0; i < pts.size() && !found; ++i) {
+            for (int j = 0; j < pts.size() && !found; ++j) {
+                if (i == j) continue;
+                at = pts[i] + 0.5 * (pts[i] - pts[j]);
+                found = referenceTable(modelPath_, at.x(), at.y()) !=
+                        referenceTable(modelPath_, at.x(), at.y(), BRDF_ATLAS_BLEND_PLAUSIBLE);
+            }
+        }
+        QVERIFY2(found, "no point of the test model where the plausible rule moves the weights");
+        view_->setMarker(at);
+        panel_->plausibleBox()->setChecked(true);
+        QSignalSpy done(panel_, &AtlasPanel::reconstructed);
+        QSignalSpy failed(panel_, &AtlasPanel::failed);
+        QTest::mouseClick(panel_->validateButton(), Qt::LeftButton);
+        QVERIFY(QTest::qWaitFor([&] { return done.count() + failed.count() > 0; }, 120000));
+        panel_->plausibleBox()->setChecked(false);
+        QVERIFY2(failed.isEmpty(), failed.isEmpty() ? "" : qPrintable(failed.first().first().toString()));
+        const AtlasReconstruction &r = panel_->lastReconstruction();
+        QCOMPARE(r.blend, BRDF_ATLAS_BLEND_PLAUSIBLE);
+        QVERIFY(*r.table == referenceTable(modelPath_, at.x(), at.y(), BRDF_ATLAS_BLEND_PLAUSIBLE));
+        checkPlausibilityShown(panel_, BRDF_ATLAS_BLEND_PLAUSIBLE);
+        QVERIFY2(panel_->statusLabel()->text().contains("(plausible rule)"),
+                 qPrintable(panel_->statusLabel()->text()));
     }
 
     void plausibilityWording() {

@@ -2,7 +2,7 @@
 #include "AtlasMapWidget.h"
 #include "AtlasStatus.h"
 
-#include <QFileDialog>
+#include <QCheckBox>
 #include <QFileInfo>
 #include <QHBoxLayout>
 #include <QLabel>
@@ -11,13 +11,11 @@
 #include <QPainterPath>
 #include <QProgressBar>
 #include <QPushButton>
-#include <QSaveFile>
 #include <QSettings>
 #include <QToolTip>
 #include <QVBoxLayout>
 #include <QWheelEvent>
 #include <QtConcurrent/QtConcurrentRun>
-#include <QtEndian>
 
 #include <algorithm>
 #include <cmath>
@@ -61,34 +59,6 @@ QRgb atlasPixel(const float *rgb, float variance) {
         c[k] = int(std::lround(255 * srgb(v + t * (kFadeGrey - v))));
     }
     return qRgb(c[0], c[1], c[2]);
-}
-
-bool atlasWriteMerl(const AtlasReconstruction &r, const QString &path, QString *error) {
-    auto fail = [&](const QString &why) {
-        if (error) *error = QStringLiteral("%1: %2").arg(path, why);
-        return false;
-    };
-    if (!r.table) return fail(QStringLiteral("nothing reconstructed yet"));
-    const std::size_t bins = r.dims.theta_h * r.dims.theta_d * r.dims.phi_d;
-    if (r.table->size() != 3 * bins) return fail(QStringLiteral("table does not match its dims"));
-    QSaveFile f(path);
-    if (!f.open(QIODevice::WriteOnly)) return fail(f.errorString());
-    for (std::size_t d : {r.dims.theta_h, r.dims.theta_d, r.dims.phi_d}) {
-        const qint32 le = qToLittleEndian(static_cast<qint32>(d));
-        f.write(reinterpret_cast<const char *>(&le), sizeof le);
-    }
-    QByteArray chunk;
-    const std::size_t step = 1 << 16;
-    for (std::size_t i = 0; i < r.table->size(); i += step) {
-        const std::size_t n = std::min(step, r.table->size() - i);
-        chunk.resize(static_cast<int>(n * sizeof(double)));
-        for (std::size_t k = 0; k < n; ++k) {
-            qToLittleEndian((*r.table)[i + k], chunk.data() + k * sizeof(double));
-        }
-        if (f.write(chunk) != chunk.size()) return fail(f.errorString());
-    }
-    if (!f.commit()) return fail(f.errorString());
-    return true;
 }
 
 // ---------------------------------------------------------------------------
@@ -438,6 +408,7 @@ AtlasPanel::AtlasPanel(QWidget *parent)
       coords_(new QLabel),
       validate_(new QPushButton(QStringLiteral("Validate"))),
       save_(new QPushButton(QStringLiteral("Save .binary..."))),
+      plausible_(new QCheckBox(QStringLiteral("Plausible"))),
       plausibility_(new QLabel),
       progress_(new QProgressBar),
       status_(new QLabel),
@@ -459,7 +430,14 @@ AtlasPanel::AtlasPanel(QWidget *parent)
     auto *buttons = new QHBoxLayout;
     validate_->setToolTip(QStringLiteral("Reconstruct the material at the marker"));
     save_->setToolTip(QStringLiteral("Save the last reconstructed material as a MERL .binary file"));
+    plausible_->setToolTip(
+        QStringLiteral("Validate makes the plausible rule's material: the GP's blend weights moved "
+                       "towards a convex blend of the materials just where it would go negative "
+                       "or reflect more than it receives (one more pass over the model's data)"));
+    plausible_->setChecked(
+        QSettings(QStringLiteral("brdf-atlas"), QStringLiteral("plugin")).value(plausibleKey()).toBool());
     buttons->addWidget(validate_);
+    buttons->addWidget(plausible_);
     buttons->addWidget(save_);
     layout->addLayout(buttons);
     plausibility_->setWordWrap(true);
@@ -487,6 +465,9 @@ AtlasPanel::AtlasPanel(QWidget *parent)
     });
     connect(validate_, &QPushButton::clicked, this, &AtlasPanel::validatePoint);
     connect(save_, &QPushButton::clicked, this, &AtlasPanel::saveDialog);
+    connect(plausible_, &QCheckBox::toggled, this, [](bool on) {
+        QSettings(QStringLiteral("brdf-atlas"), QStringLiteral("plugin")).setValue(plausibleKey(), on);
+    });
     connect(openWatcher_, &QFutureWatcher<Opened>::finished, this, [this] {
         Opened o = openWatcher_->result();
         setBusy(false, QString());
@@ -519,7 +500,11 @@ AtlasPanel::AtlasPanel(QWidget *parent)
         showPlausibility();
         save_->setEnabled(true);
         status_->setStyleSheet(QString());
-        status_->setText(QStringLiteral("%1: reconstructed in %2 s").arg(b.r.name).arg(seconds, 0, 'f', 2));
+        status_->setText(QStringLiteral("%1: reconstructed%2 in %3 s")
+                             .arg(b.r.name)
+                             .arg(b.r.blend == BRDF_ATLAS_BLEND_PLAUSIBLE ? QStringLiteral(" (plausible rule)")
+                                                                         : QString())
+                             .arg(seconds, 0, 'f', 2));
         emit reconstructed(last_);
     });
 }
@@ -638,15 +623,6 @@ void AtlasPanel::openModel(const QString &path) {
     }));
 }
 
-void AtlasPanel::chooseModel() {
-    const QString last =
-        QSettings(QStringLiteral("brdf-atlas"), QStringLiteral("plugin")).value(settingsKey()).toString();
-    const QString path = QFileDialog::getOpenFileName(
-        this, QStringLiteral("Open brdf-atlas model"), last,
-        QStringLiteral("brdf-atlas models (*.atlas *.model);;All files (*)"));
-    if (!path.isEmpty()) openModel(path);
-}
-
 void AtlasPanel::validatePoint() {
     if (!view_->model() || !view_->hasMarker() || buildWatcher_->isRunning()) return;
     const QPointF m = view_->marker();
@@ -655,6 +631,7 @@ void AtlasPanel::validatePoint() {
     r.y = m.y();
     r.name = nameFor(r.x, r.y);
     r.modelPath = modelPath_;
+    r.blend = plausible_->isChecked() ? BRDF_ATLAS_BLEND_PLAUSIBLE : BRDF_ATLAS_BLEND_GP;
     std::shared_ptr<const brdf_atlas::Model> model = view_->model();
     clock_.start();
     setBusy(true, QStringLiteral("reconstructing at (%1, %2)...").arg(r.x, 0, 'f', 4).arg(r.y, 0, 'f', 4));
@@ -665,8 +642,8 @@ void AtlasPanel::validatePoint() {
         Built b;
         try {
             r.dims = model->dims();
-            r.table = std::make_shared<const std::vector<double>>(model->reconstruct(r.x, r.y));
-            r.plausibility = model->plausibility(r.x, r.y, BRDF_ATLAS_BLEND_GP);
+            r.table = std::make_shared<const std::vector<double>>(model->reconstruct(r.x, r.y, r.blend));
+            r.plausibility = model->plausibility(r.x, r.y, r.blend);
             b.r = r;
         } catch (const std::exception &e) {
             b.error = errorText(e);
@@ -674,23 +651,4 @@ void AtlasPanel::validatePoint() {
         return b;
     }));
     showPlausibility();
-}
-
-void AtlasPanel::saveDialog() {
-    if (!last_.table) return;
-    QString base = QStringLiteral("atlas_%1_%2.binary").arg(last_.x, 0, 'f', 3).arg(last_.y, 0, 'f', 3);
-    const QString path = QFileDialog::getSaveFileName(this, QStringLiteral("Save as MERL .binary"), base,
-                                                      QStringLiteral("MERL BRDF (*.binary)"));
-    if (!path.isEmpty()) saveTo(path);
-}
-
-bool AtlasPanel::saveTo(const QString &path) {
-    QString error;
-    if (!atlasWriteMerl(last_, path, &error)) {
-        fail(error);
-        return false;
-    }
-    status_->setStyleSheet(QString());
-    status_->setText(QStringLiteral("saved %1").arg(path));
-    return true;
 }

@@ -33,6 +33,7 @@
 
 #include "brdf_atlas.hpp"
 
+class QCheckBox;
 class QLabel;
 class QProgressBar;
 class QPushButton;
@@ -49,8 +50,11 @@ struct AtlasReconstruction {
     brdf_atlas::Dims dims{};
     /// The MERL table (3 * bins doubles, the data of a .binary file).
     std::shared_ptr<const std::vector<double>> table;
+    /// The blend rule the table was made with: BRDF_ATLAS_BLEND_GP or
+    /// BRDF_ATLAS_BLEND_PLAUSIBLE.
+    std::int32_t blend = BRDF_ATLAS_BLEND_GP;
     /// How physical the table is and what the model knows at (x, y)
-    /// (brdf_atlas_model_plausibility of the GP blend the table comes from).
+    /// (brdf_atlas_model_plausibility under the same rule).
     brdf_atlas::Plausibility plausibility{};
 };
 Q_DECLARE_METATYPE(AtlasReconstruction)
@@ -186,6 +190,9 @@ public:
     AtlasMapView *mapView() const { return view_; }
     QPushButton *validateButton() const { return validate_; }
     QPushButton *saveButton() const { return save_; }
+    /// Validate makes the plausible rule's material when checked, the GP's
+    /// otherwise (remembered across sessions).
+    QCheckBox *plausibleBox() const { return plausible_; }
     QProgressBar *progressBar() const { return progress_; }
     QLabel *coordinatesLabel() const { return coords_; }
     QLabel *statusLabel() const { return status_; }
@@ -203,6 +210,8 @@ public:
     /// The QSettings key of the last model opened (organisation and
     /// application names are the host's).
     static QString settingsKey() { return QStringLiteral("brdf-atlas/lastModel"); }
+    /// Settings key of the Plausible box's state.
+    static QString plausibleKey() { return QStringLiteral("brdf-atlas/plausible"); }
 
 public slots:
     /// Open a model file off the GUI thread (checks the store); emits
@@ -246,6 +255,7 @@ private:
     QLabel *coords_;
     QPushButton *validate_;
     QPushButton *save_;
+    QCheckBox *plausible_;
     QLabel *plausibility_;
     QProgressBar *progress_;
     QLabel *status_;
