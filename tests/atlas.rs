@@ -7,8 +7,8 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use brdf_atlas_core::AlbedoMethod;
-use brdf_atlas_core::Model;
 use brdf_atlas_core::render::read_sidecar;
+use brdf_atlas_core::{Model, OptimizerKind};
 use brdf_merl::{MerlFile, angles::direction};
 use common::{binaries, brdf_atlas, fit, map, point_after_at, synth, texts};
 
@@ -97,15 +97,12 @@ fn fit_writes_the_model_and_its_store_and_summarises() {
     for want in [
         "fitted 6 materials (16x16x32, d = 24576)",
         "transform log",
-        "optimiser hooke-jeeves",
+        "optimiser lbfgs",
         "(f64, ",
         "cost ",
         " -> ",
         "iterations",
-        "evaluations",
-        "pattern moves",
-        "refactorisations",
-        "max drift",
+        "evaluations (cost and gradient",
         "scan ",
         "store+Gram ",
         "optimise ",
@@ -117,6 +114,28 @@ fn fit_writes_the_model_and_its_store_and_summarises() {
     let m = Model::open(&model).unwrap();
     assert_eq!(m.names().len(), 6);
     assert_eq!(m.q(), 2);
+    assert_eq!(m.file().fit.optimizer, OptimizerKind::Lbfgs);
+    // Hooke-Jeeves says what its incremental updates did.
+    let out = brdf_atlas([
+        Path::new("fit"),
+        &data,
+        Path::new("-o"),
+        &model,
+        Path::new("--optimizer"),
+        Path::new("hooke-jeeves"),
+    ]);
+    let (stdout, stderr) = texts(&out);
+    assert!(out.status.success(), "{stderr}");
+    for want in [
+        "optimiser hooke-jeeves",
+        "pattern moves",
+        "refactorisations",
+        "max drift",
+    ] {
+        assert!(stdout.contains(want), "{want:?} in\n{stdout}");
+    }
+    let m = Model::open(&model).unwrap();
+    assert_eq!(m.file().fit.optimizer, OptimizerKind::HookeJeeves);
 }
 
 #[test]

@@ -184,7 +184,7 @@ fn report_writes_every_file_and_fails_atomically() {
 }
 
 /// `--growth` fits synthetic databases of each size with both optimisers;
-/// its Hooke-Jeeves cost is the one `fit` reaches on the same materials
+/// its L-BFGS cost (`fit`'s default) is the one `fit` reaches on the same materials
 /// (`synth`'s generator, the same seed) written as files (a separate path:
 /// files, the store pass, the CLI).
 #[test]
@@ -226,8 +226,8 @@ fn growth_section_matches_fit_on_the_same_materials() {
             ("30", "lbfgs")
         ]
     );
-    // The 30-material Hooke-Jeeves fit again, from the same materials
-    // (seed 1) written as files, through `fit`.
+    // The 30-material L-BFGS fit again, from the same materials (seed 1)
+    // written as files, through `fit` with its defaults.
     let same = tmp.path().join("same");
     synth(&same, 30, "16,16,32", 1);
     let stdout = fit(&same, &tmp.path().join("same.atlas"), &[]);
@@ -245,7 +245,8 @@ fn growth_section_matches_fit_on_the_same_materials() {
         .unwrap()
         .parse()
         .unwrap();
-    let reported: f64 = rows[2][3].parse().unwrap();
+    assert_eq!(rows[3][1], "lbfgs");
+    let reported: f64 = rows[3][3].parse().unwrap();
     assert!(
         (printed - reported).abs() <= 1e-6 * reported.abs(),
         "fit printed {printed}, the report {reported}"

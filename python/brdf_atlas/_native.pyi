@@ -71,7 +71,7 @@ def fit(
     *,
     q: int = 2,
     transform: Literal["log", "raw"] = "log",
-    optimizer: Literal["hooke-jeeves", "lbfgs"] = "hooke-jeeves",
+    optimizer: Literal["hooke-jeeves", "lbfgs"] = "lbfgs",
     store_precision: Literal["f32", "f64"] = "f32",
     length_scale: float = 1.0,
     noise: float = 1e-4,

@@ -119,7 +119,7 @@ fn choice<T>(value: &str, option: &str, parse: fn(&str) -> Option<T>, names: &st
 /// out, with why), `cost`, `initial_cost`, `iterations`, `evaluations`, and
 /// `seconds` (per phase: scan, store, optimise, save).
 #[pyfunction]
-#[pyo3(signature = (merl_dir, out, *, q = 2, transform = "log", optimizer = "hooke-jeeves",
+#[pyo3(signature = (merl_dir, out, *, q = 2, transform = "log", optimizer = "lbfgs",
                     store_precision = "f32", length_scale = 1.0, noise = 1e-4, min_step = 1e-3,
                     progress = None))]
 #[allow(clippy::too_many_arguments)]

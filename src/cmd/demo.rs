@@ -177,7 +177,7 @@ fn fit_model(state: &mut State) -> Result<(), Error> {
         model: state.args.dir.join(MODEL),
         q: 2,
         transform: TransformArg::Log,
-        optimizer: OptimizerArg::HookeJeeves,
+        optimizer: OptimizerArg::Lbfgs,
         store_precision: PrecisionArg::F32,
         length_scale: fit::DEFAULT_LENGTH_SCALE,
         noise: fit::DEFAULT_NOISE,

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use brdf_atlas_core::limits::MAX_Q;
-use brdf_atlas_core::{Dataset, GplvmParams, Store};
+use brdf_atlas_core::{Dataset, GplvmParams, OptimizerKind, Store};
 use brdf_atlas_core::{FitOptions, FitReport, fit_dir, store_path_for};
 
 use crate::args::{OptimizerArg, PrecisionArg, TransformArg};
@@ -46,7 +46,7 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = TransformArg::Log)]
     pub transform: TransformArg,
     /// Optimiser of the latent points.
-    #[arg(long, value_enum, default_value_t = OptimizerArg::HookeJeeves)]
+    #[arg(long, value_enum, default_value_t = OptimizerArg::Lbfgs)]
     pub optimizer: OptimizerArg,
     /// Precision of the stored data (sums are always in f64).
     #[arg(long, value_enum, default_value_t = PrecisionArg::F32)]
@@ -199,17 +199,26 @@ pub fn write_summary(out: &mut impl Write, args: &Args, fitted: &Fitted) -> io::
         cost(o.initial_cost),
         cost(o.cost)
     )?;
-    writeln!(
-        out,
-        "  search     {} iterations, {} evaluations, {} pattern moves",
-        o.iterations, o.evaluations, o.pattern_moves
-    )?;
-    let d = o.drift;
-    writeln!(
-        out,
-        "  numerics   {} rank-one updates, {} refactorisations, {} dense fallbacks, max drift {:.1e} (cost), {:.1e} (K^-1)",
-        d.updates, d.refreshes, d.dense_fallbacks, d.max_cost_drift, d.max_inverse_drift
-    )?;
+    match r.fit.optimizer {
+        OptimizerKind::HookeJeeves => {
+            writeln!(
+                out,
+                "  search     {} iterations, {} evaluations, {} pattern moves",
+                o.iterations, o.evaluations, o.pattern_moves
+            )?;
+            let d = o.drift;
+            writeln!(
+                out,
+                "  numerics   {} rank-one updates, {} refactorisations, {} dense fallbacks, max drift {:.1e} (cost), {:.1e} (K^-1)",
+                d.updates, d.refreshes, d.dense_fallbacks, d.max_cost_drift, d.max_inverse_drift
+            )?;
+        }
+        OptimizerKind::Lbfgs => writeln!(
+            out,
+            "  search     {} iterations, {} evaluations (cost and gradient, each from a fresh factorisation)",
+            o.iterations, o.evaluations
+        )?,
+    }
     let heap = r.peak_heap.map(|p| format!("peak heap {}", size(p as u64)));
     let private = r
         .peak_private

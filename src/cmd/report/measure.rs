@@ -299,7 +299,7 @@ fn per_transform(
         )?);
         labels.push((method, q));
         r.fits.push(row);
-        if q == 2 && optimizer == OptimizerKind::HookeJeeves {
+        if q == 2 && optimizer == OptimizerKind::default() {
             kept = Some((fit, predictors.len() - 1));
             r.kept_label = method;
         }

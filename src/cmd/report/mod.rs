@@ -61,7 +61,7 @@ pub struct Args {
     #[arg(long)]
     pub quick: bool,
     /// Optimiser of the fits for q = 1..Q (the other one fits q = 2 as well;
-    /// maps and the precision comparison use the Hooke-Jeeves fit, `fit`'s default).
+    /// maps and the precision comparison use the fit of `fit`'s default, L-BFGS).
     #[arg(long, value_enum, default_value_t = OptimizerArg::Lbfgs)]
     pub optimizer: OptimizerArg,
     /// Also time fits of synthetic databases of these sizes (16 x 16 x 32

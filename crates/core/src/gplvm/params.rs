@@ -20,7 +20,9 @@ use crate::gplvm::optim::{BOX, HookeJeeves, Lbfgs, Optimizer, OptimizerKind, Out
 use crate::gplvm::pca::dual_pca;
 use crate::progress::Progress;
 
-/// GPLVM settings; `Default` gives the paper's (q = 2, l = 1, mu = 1e-4, Hooke-Jeeves).
+/// GPLVM settings; `Default` gives the paper's kernel (q = 2, l = 1,
+/// mu = 1e-4) with L-BFGS (the paper's Hooke-Jeeves is
+/// [`OptimizerKind::HookeJeeves`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct GplvmParams {
     q: usize,

@@ -70,9 +70,11 @@ pub trait Optimizer {
 #[serde(rename_all = "kebab-case")]
 pub enum OptimizerKind {
     /// Hooke-Jeeves direct search with O(N^2) rank-one updates (the paper's method).
-    #[default]
     HookeJeeves,
-    /// Projected L-BFGS on the analytic gradient.
+    /// Projected L-BFGS on the analytic gradient, the default: it reaches a
+    /// lower cost and a lower held-out error than Hooke-Jeeves in less time
+    /// (docs/performance.md).
+    #[default]
     Lbfgs,
 }
 
