@@ -1,5 +1,7 @@
 //! Benchmark of `brdf-atlas swatches`' work: an 8 x 8 sheet of 128-pixel
-//! lit spheres over the map's default view (point queries, shading, layout).
+//! lit spheres over the map's default view (point queries, shading, layout),
+//! with the GP's blend and with the plausible rule (whose steps for the 64
+//! points take one pass over the store); and the plausible rule at one point.
 //!
 //! Model: the file named by `BRDF_ATLAS_BENCH_MODEL` (e.g. the 100
 //! NBRDF-derived materials, log transform), or else one fitted before timing
@@ -33,18 +35,23 @@ fn swatches(c: &mut Criterion) {
     let points = sheet::grid_points(&View::default(), 8);
     let mut g = c.benchmark_group("swatches");
     g.sample_size(10);
-    g.bench_function("sheet_8x8_128px", |b| {
+    for (name, rule) in [
+        ("sheet_8x8_128px", BlendRule::Gp),
+        ("sheet_8x8_128px_plausible", BlendRule::Plausible),
+    ] {
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                let s =
+                    sheet::swatches(&model, black_box(&points), None, 128, &DEFAULT_LIGHTS, rule)
+                        .expect("swatches");
+                sheet::compose(&s, 8)
+            })
+        });
+    }
+    g.bench_function("plausible_rule_one_point", |b| {
         b.iter(|| {
-            let s = sheet::swatches(
-                &model,
-                black_box(&points),
-                None,
-                128,
-                &DEFAULT_LIGHTS,
-                BlendRule::Gp,
-            )
-            .expect("swatches");
-            sheet::compose(&s, 8)
+            let blend = model.at_with(black_box(&points[9]), BlendRule::Plausible);
+            blend.expect("plausible blend").steps().is_some()
         })
     });
     g.finish();

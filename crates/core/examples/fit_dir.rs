@@ -1,5 +1,6 @@
 //! Fit a directory of MERL files and print the phases' times:
 //! `cargo run --release -p brdf-atlas-core --example fit_dir -- DIR MODEL [raw|log] [hooke-jeeves|lbfgs]`.
+//! With `FIT_HISTORY=FILE` the cost after each iteration goes to FILE, one a line.
 
 use brdf_atlas_core::{FitOptions, fit_dir};
 use brdf_atlas_core::{GplvmParams, NoProgress, OptimizerKind, Precision, TransformKind};
@@ -36,5 +37,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         r.save_time
     );
     println!("cost {} -> {}; drift {:?}", o.initial_cost, o.cost, o.drift);
+    if let Some(path) = std::env::var_os("FIT_HISTORY") {
+        let lines: String = o.history.iter().map(|c| format!("{c:e}\n")).collect();
+        std::fs::write(path, lines)?;
+    }
     Ok(())
 }
