@@ -1,7 +1,8 @@
 //! Benchmarks of a whole fit and its phases, as `brdf-atlas fit` runs them:
 //! the store pass (read, check and transform every value, centre, write the
 //! f32 store, accumulate the Gram matrix), the optimisation on that Gram
-//! matrix, and the whole `fit_dir` (open, store pass, optimise, save) into a
+//! matrix (L-BFGS, the default, and Hooke-Jeeves), and the whole `fit_dir`
+//! with the defaults (open, store pass, optimise, save) into a
 //! fresh output. Before timing, one fit prints its peak heap (counted by
 //! the allocator; the inputs and the store are mapped files, not heap).
 //!
@@ -18,7 +19,8 @@ use std::time::Duration;
 
 use brdf_atlas_core::{Dataset, build_store};
 use brdf_atlas_core::{FitOptions, fit_dir, store_path_for};
-use brdf_atlas_core::{GplvmParams, GramData, NoProgress, Precision, TransformKind, heap};
+use brdf_atlas_core::{GplvmParams, GramData, NoProgress, OptimizerKind, Precision};
+use brdf_atlas_core::{TransformKind, heap};
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
 
 #[global_allocator]
@@ -84,14 +86,18 @@ fn fit(c: &mut Criterion) {
     )
     .expect("store");
     let gram = GramData::new(y, 3 * files.dims().bins()).expect("gram");
-    g.bench_function("optimise_hooke_jeeves_log", |b| {
-        b.iter(|| {
-            options
-                .params
-                .fit(black_box(&gram), &NoProgress)
-                .expect("fit")
-        })
-    });
+    let hooke_jeeves = GplvmParams::new(2)
+        .optimizer(OptimizerKind::HookeJeeves)
+        .check()
+        .expect("defaults");
+    for (name, params) in [
+        ("optimise_lbfgs_log", &options.params),
+        ("optimise_hooke_jeeves_log", &hooke_jeeves),
+    ] {
+        g.bench_function(name, |b| {
+            b.iter(|| params.fit(black_box(&gram), &NoProgress).expect("fit"))
+        });
+    }
     let _ = std::fs::remove_file(&store);
     g.bench_function("fit_dir_log_fresh_output", |b| {
         b.iter_batched(
