@@ -72,13 +72,18 @@ impl Kernel {
     pub fn matrix(&self, x: MatRef<'_, f64>) -> Mat<f64> {
         let n = x.nrows();
         let pts = rows_of(x);
-        Mat::from_fn(n, n, |i, j| {
-            if i == j {
-                1.0 + self.noise
-            } else {
-                self.eval(&pts[i], &pts[j])
+        // Each pair once: `eval` is symmetric bit for bit (it sums squared
+        // differences, and `a - b` is `-(b - a)` exactly).
+        let mut k = Mat::<f64>::zeros(n, n);
+        for j in 0..n {
+            k[(j, j)] = 1.0 + self.noise;
+            for i in 0..j {
+                let v = self.eval(&pts[i], &pts[j]);
+                k[(i, j)] = v;
+                k[(j, i)] = v;
             }
-        })
+        }
+        k
     }
 
     /// `k(p)_i = exp(-|p - x_i|^2 / (2 l^2))`: no noise term, so a training

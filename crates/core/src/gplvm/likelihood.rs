@@ -111,9 +111,11 @@ pub fn trace_product(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> f64 {
 fn sandwich(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
     let n = a.nrows();
     let columns = |m: MatRef<'_, f64>| -> Vec<f64> {
-        (0..n)
-            .flat_map(|j| (0..n).map(move |i| m[(i, j)]))
-            .collect()
+        let mut out = Vec::with_capacity(n * n);
+        for j in 0..n {
+            out.extend((0..n).map(|i| m[(i, j)]));
+        }
+        out
     };
     let (a, b) = (columns(a), columns(b));
     let (mut ab, mut aba) = (vec![0.0; n * n], vec![0.0; n * n]);
