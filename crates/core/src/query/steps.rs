@@ -80,8 +80,11 @@ impl Model {
     /// A bin whose GP blend the clamp leaves within budget takes step 0
     /// whatever the other steps would give, so each bin is read twice at
     /// most: once for the GP blends alone at step 0, and once more, for the
-    /// points over budget only, for every step. The sums are the same either
-    /// way (the same rows in the same order), and so are the steps.
+    /// points over budget only, for every step. Both passes sum the same
+    /// rows in the same order; the row values come from a matrix product
+    /// or row by row depending on how many weight vectors a pass has, which
+    /// can differ in the last bit, so only a bin exactly at the budget
+    /// could be decided differently from a single full pass.
     fn plausible_steps(&self, gps: &[Blend<'_>], convex: &[Vec<f64>]) -> Result<Vec<Vec<f64>>> {
         let m = gps.len();
         if m == 0 {
