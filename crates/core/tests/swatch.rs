@@ -65,19 +65,36 @@ fn a_lambertian_sphere_is_shaded_by_the_cosine() {
     assert_eq!(sphere.radiance[0], [0.0; 3]);
 }
 
-#[test]
-fn a_sphere_from_point_queries_equals_the_one_from_the_reconstructed_file() {
-    let dir = tempfile::tempdir().unwrap();
-    let data = dir.path().join("data");
-    synth::write_dir(&data, 8, Dims::new(16, 16, 32).unwrap(), 4).unwrap();
-    let path = dir.path().join("m.atlas");
+/// A log-transform model of `count` synthetic materials (seed `seed`) fitted in `dir`.
+fn fitted(
+    dir: &std::path::Path,
+    count: usize,
+    dims: Dims,
+    seed: u64,
+    precision: Precision,
+) -> Model {
+    let data = dir.join("data");
+    synth::write_dir(&data, count, dims, seed).unwrap();
+    let path = dir.join("m.atlas");
     let options = FitOptions {
         params: GplvmParams::new(2).check().unwrap(),
         transform: TransformKind::Log,
-        precision: Precision::F32,
+        precision,
     };
     fit_dir(&data, &path, &options, &NoProgress).unwrap();
-    let model = Model::open(&path).unwrap();
+    Model::open(&path).unwrap()
+}
+
+#[test]
+fn a_sphere_from_point_queries_equals_the_one_from_the_reconstructed_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = fitted(
+        dir.path(),
+        8,
+        Dims::new(16, 16, 32).unwrap(),
+        4,
+        Precision::F32,
+    );
     let x = [0.31, -0.27];
     let blend = model.at(&x).unwrap();
     let lights = brdf_atlas_core::swatch::DEFAULT_LIGHTS;
@@ -106,16 +123,13 @@ fn a_sphere_from_point_queries_equals_the_one_from_the_reconstructed_file() {
 #[test]
 fn plausible_swatches_are_the_spheres_of_the_plausible_reconstructions() {
     let dir = tempfile::tempdir().unwrap();
-    let data = dir.path().join("data");
-    synth::write_dir(&data, 10, Dims::new(12, 12, 24).unwrap(), 7).unwrap();
-    let path = dir.path().join("m.atlas");
-    let options = FitOptions {
-        params: GplvmParams::new(2).check().unwrap(),
-        transform: TransformKind::Log,
-        precision: Precision::F64,
-    };
-    fit_dir(&data, &path, &options, &NoProgress).unwrap();
-    let model = Model::open(&path).unwrap();
+    let model = fitted(
+        dir.path(),
+        10,
+        Dims::new(12, 12, 24).unwrap(),
+        7,
+        Precision::F64,
+    );
     let lights = brdf_atlas_core::swatch::DEFAULT_LIGHTS;
     let points = sheet::grid_points(&brdf_atlas_core::View::default(), 3);
     let sheet = sheet::swatches(&model, &points, None, 24, &lights, BlendRule::Plausible).unwrap();
