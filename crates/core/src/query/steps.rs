@@ -177,13 +177,7 @@ impl Model {
                     }
                 } else {
                     s.z64.resize(n * len, 0.0);
-                    match store.z() {
-                        Rows::F32(z) => s.z64[..n * len]
-                            .iter_mut()
-                            .zip(&z[r0 * n..range.end * n])
-                            .for_each(|(o, v)| *o = f64::from(*v)),
-                        Rows::F64(z) => s.z64[..n * len].copy_from_slice(&z[r0 * n..range.end * n]),
-                    }
+                    store.copy_rows(r0, &mut s.z64[..n * len]);
                     matmul(&mut s.t64[..p * len], &a, &s.z64[..n * len], n);
                     for (k, row) in range.clone().enumerate() {
                         s.t64[k * p..(k + 1) * p]
