@@ -244,42 +244,53 @@ fn the_plausible_rule_brings_the_largest_albedo_to_one() {
         let gp = m.at_with(&x, BlendRule::Gp).unwrap();
         let pl = m.at_with(&x, BlendRule::Plausible).unwrap();
         let (a_gp, a_pl) = (table_albedo(&gp), table_albedo(&pl));
-        // The convex blend's albedo (recomputed densely from the stored rows
-        // with the weights the rule reports), or 1 where nothing moved.
-        let ceiling = match pl.steps() {
-            Some((convex, _)) => {
-                let v = convex.to_vec();
-                let convex_blend_albedo = {
-                    let rule = DirectionalRule::new(DIMS);
-                    let values = |bin: usize| -> [f64; 3] {
-                        let mut rgb = [0.0; 3];
-                        let store = m.store();
-                        let n = store.n();
-                        let mut z = vec![0.0; n];
-                        for (ch, out) in rgb.iter_mut().enumerate() {
-                            let row = ch * DIMS.bins() + bin;
-                            if store.unmeasured()[row] != 0 {
-                                continue;
-                            }
-                            store.copy_rows(row, &mut z);
-                            let t = store.mean()[row]
-                                + v.iter().zip(&z).map(|(a, b)| a * b).sum::<f64>();
-                            let (ci, co) = DIMS.angles_of(bin).cosines();
-                            let c = ci * co;
-                            *out = if c < 1e-6 {
-                                0.0
-                            } else {
-                                (t.exp_m1() / c).max(0.0)
-                            };
-                        }
-                        rgb
-                    };
-                    largest(&rule.integrate(values)).0
-                };
-                convex_blend_albedo.max(1.0)
+        // The ceiling: 1, or the convex blend's albedo where the materials
+        // themselves exceed 1. The convex weights of the narrower kernel
+        // and their blend's albedo are recomputed here, densely from the
+        // stored rows, at every point (moved or not).
+        let l = m.file().kernel.length_scale * CONVEX_LENGTH_RATIO;
+        let d2: Vec<f64> = (0..m.names().len())
+            .map(|i| (0..2).map(|c| (m.latent()[(i, c)] - x[c]).powi(2)).sum())
+            .collect();
+        let nearest = d2.iter().copied().fold(f64::INFINITY, f64::min);
+        let k: Vec<f64> = d2
+            .iter()
+            .map(|d| (-(d - nearest) / (2.0 * l * l)).exp())
+            .collect();
+        let sum: f64 = k.iter().sum();
+        let v: Vec<f64> = k.iter().map(|k| k / sum).collect();
+        if let Some((convex, _)) = pl.steps() {
+            for (got, want) in convex.iter().zip(&v) {
+                assert!((got - want).abs() < 1e-12, "{x:?}: convex {got} vs {want}");
             }
-            None => 1.0,
+        }
+        let convex_blend_albedo = {
+            let rule = DirectionalRule::new(DIMS);
+            let values = |bin: usize| -> [f64; 3] {
+                let mut rgb = [0.0; 3];
+                let store = m.store();
+                let n = store.n();
+                let mut z = vec![0.0; n];
+                for (ch, out) in rgb.iter_mut().enumerate() {
+                    let row = ch * DIMS.bins() + bin;
+                    if store.unmeasured()[row] != 0 {
+                        continue;
+                    }
+                    store.copy_rows(row, &mut z);
+                    let t = store.mean()[row] + v.iter().zip(&z).map(|(a, b)| a * b).sum::<f64>();
+                    let (ci, co) = DIMS.angles_of(bin).cosines();
+                    let c = ci * co;
+                    *out = if c < 1e-6 {
+                        0.0
+                    } else {
+                        (t.exp_m1() / c).max(0.0)
+                    };
+                }
+                rgb
+            };
+            largest(&rule.integrate(values)).0
         };
+        let ceiling = convex_blend_albedo.max(1.0);
         assert!(
             a_pl <= ceiling * (1.0 + 1e-6),
             "{x:?}: albedo {a_gp} -> {a_pl}, ceiling {ceiling}"

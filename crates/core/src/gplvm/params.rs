@@ -44,7 +44,7 @@ impl GplvmParams {
         GplvmParams {
             q,
             kernel: Kernel::default(),
-            optimizer: OptimizerKind::HookeJeeves,
+            optimizer: OptimizerKind::default(),
             hooke_jeeves: HookeJeeves::default(),
             lbfgs: Lbfgs::default(),
         }
@@ -563,7 +563,15 @@ mod tests {
     #[test]
     fn parameters_are_checked() {
         assert!(GplvmParams::new(2).noise(0.0).check().is_err());
-        let e = GplvmParams::new(2).learn_kernel(true).check().unwrap_err();
+        // The defaults' optimiser is L-BFGS, which can learn the kernel;
+        // Hooke-Jeeves cannot.
+        assert_eq!(GplvmParams::new(2).optimizer, OptimizerKind::default());
+        assert!(GplvmParams::new(2).learn_kernel(true).check().is_ok());
+        let e = GplvmParams::new(2)
+            .optimizer(OptimizerKind::HookeJeeves)
+            .learn_kernel(true)
+            .check()
+            .unwrap_err();
         assert!(e.to_string().contains("L-BFGS"), "{e}");
         assert!(GplvmParams::new(2).length_scale(f64::NAN).check().is_err());
         assert!(GplvmParams::new(0).check().is_err());
