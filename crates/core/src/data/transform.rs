@@ -206,6 +206,11 @@ impl Transform for CosineLog {
         let scale = physical(channel, 1.0);
         let cos = &self.cos[bin0..bin0 + raw.len()];
         #[cfg(target_arch = "x86_64")]
+        if crate::simd::has_avx512f() {
+            // SAFETY: the CPU has AVX-512F (checked just above).
+            return unsafe { cosine_log_avx512(scale, raw, cos, out) };
+        }
+        #[cfg(target_arch = "x86_64")]
         if crate::simd::has_avx2_fma() {
             // SAFETY: the CPU has AVX2 and FMA (checked just above).
             return unsafe { cosine_log_avx2(scale, raw, cos, out) };
@@ -256,6 +261,33 @@ unsafe fn cosine_log_avx2(scale: f64, raw: &[f64], cos: &[f64], out: &mut [f64])
                 _mm256_loadu_pd(c.as_ptr()),
             );
             _mm256_storeu_pd(o.as_mut_ptr(), fastlog::log1p_avx2(x));
+        }
+    }
+    cosine_log(scale, &raw[split..n], &cos[split..n], &mut out[split..n]);
+}
+
+/// [`cosine_log`] 8 values at a time with [`fastlog::log1p_avx512`].
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn cosine_log_avx512(scale: f64, raw: &[f64], cos: &[f64], out: &mut [f64]) {
+    use std::arch::x86_64::*;
+    let n = out.len().min(raw.len()).min(cos.len());
+    let split = n / 8 * 8;
+    for ((o, v), c) in out[..split]
+        .chunks_exact_mut(8)
+        .zip(raw[..split].chunks_exact(8))
+        .zip(cos[..split].chunks_exact(8))
+    {
+        // SAFETY: each chunk is exactly 8 elements; AVX-512F by the caller.
+        // max(NaN, 0) = 0 as in `f64::max` (the NaN is the first operand);
+        // the sign of a zero does not reach log1p's result.
+        unsafe {
+            let v = _mm512_mul_pd(_mm512_loadu_pd(v.as_ptr()), _mm512_set1_pd(scale));
+            let x = _mm512_mul_pd(
+                _mm512_max_pd(v, _mm512_setzero_pd()),
+                _mm512_loadu_pd(c.as_ptr()),
+            );
+            _mm512_storeu_pd(o.as_mut_ptr(), fastlog::log1p_avx512(x));
         }
     }
     cosine_log(scale, &raw[split..n], &cos[split..n], &mut out[split..n]);

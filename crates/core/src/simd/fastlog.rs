@@ -22,8 +22,9 @@
 //! table and reduction boundary), exactly 0 at 0, branch-free. [`log1p`] is
 //! plain arithmetic and `f64::mul_add` (a correctly rounded FMA everywhere:
 //! without FMA hardware in the build it is a libm call, so the portable
-//! path is slow there), and [`log1p_avx2`] performs the same operations in
-//! the same order on 4 lanes, so both give the same bits.
+//! path is slow there), and [`log1p_avx2`] and [`log1p_avx512`] perform the
+//! same operations in the same order on 4 and 8 lanes, so all give the same
+//! bits.
 //!
 //! The tables and coefficients come from `crates/core/tools/fastlog_tables.py`
 //! (mpmath, 256-bit); the tests check them against `f64::ln` independently.
@@ -128,6 +129,49 @@ pub unsafe fn log1p_avx2(x: std::arch::x86_64::__m256d) -> std::arch::x86_64::__
         let p = _mm256_fmadd_pd(p23, r2, p01);
         let p = _mm256_fmadd_pd(p45, _mm256_mul_pd(r2, r2), p);
         _mm256_fmadd_pd(p, r2, hi)
+    }
+}
+
+/// [`log1p`] of 8 lanes: the same operations in the same order, so the
+/// same bits; the table rows come by two gathers.
+///
+/// # Safety
+/// The CPU must have AVX-512F.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+pub unsafe fn log1p_avx512(x: std::arch::x86_64::__m512d) -> std::arch::x86_64::__m512d {
+    use std::arch::x86_64::*;
+    // SAFETY: AVX-512F by the caller's contract; every gather index is
+    // masked into 0..N rows of two doubles, the table's extent.
+    unsafe {
+        let u = _mm512_add_pd(_mm512_set1_pd(1.0), x);
+        let tmp = _mm512_sub_epi64(_mm512_castpd_si512(u), _mm512_set1_epi64(OFF as i64));
+        let top = _mm512_and_si512(tmp, _mm512_set1_epi64(EXP_MASK as i64));
+        let i = _mm512_srli_epi64::<{ 52 - TABLE_BITS }>(tmp);
+        let i = _mm512_and_si512(i, _mm512_set1_epi64(N as i64 - 1));
+        // Row k's invc is double 2k of the table, its logc double 2k + 1.
+        let i2 = _mm512_add_epi64(i, i);
+        let base = TABLE.as_ptr().cast::<f64>();
+        let invc = _mm512_i64gather_pd::<8>(i2, base);
+        let logc = _mm512_i64gather_pd::<8>(_mm512_add_epi64(i2, _mm512_set1_epi64(1)), base);
+        let kf = _mm512_or_si512(
+            _mm512_srli_epi64::<52>(tmp),
+            _mm512_set1_epi64(TWO52_BITS as i64),
+        );
+        let kf = _mm512_sub_pd(_mm512_castsi512_pd(kf), _mm512_set1_pd(TWO52));
+        let s = _mm512_sub_epi64(_mm512_set1_epi64(TWO511_BITS as i64), top);
+        let s = _mm512_mul_pd(_mm512_castsi512_pd(s), _mm512_set1_pd(TWO_M511));
+        let r = _mm512_fmadd_pd(s, invc, _mm512_set1_pd(-1.0));
+        let r = _mm512_fmadd_pd(_mm512_mul_pd(x, s), invc, r);
+        let hi = _mm512_fmadd_pd(kf, _mm512_set1_pd(LN2), _mm512_add_pd(logc, r));
+        let r2 = _mm512_mul_pd(r, r);
+        let p01 = _mm512_fmadd_pd(_mm512_set1_pd(A1), r, _mm512_set1_pd(A0));
+        let p23 = _mm512_fmadd_pd(_mm512_set1_pd(A3), r, _mm512_set1_pd(A2));
+        let p45 = _mm512_fmadd_pd(_mm512_set1_pd(A5), r, _mm512_set1_pd(A4));
+        let p = _mm512_fmadd_pd(p23, r2, p01);
+        let p = _mm512_fmadd_pd(p45, _mm512_mul_pd(r2, r2), p);
+        _mm512_fmadd_pd(p, r2, hi)
     }
 }
 
@@ -406,7 +450,8 @@ mod tests {
     }
 
     /// The worst error of [`log1p`] against `f64::ln_1p` over `xs`, and (on
-    /// AVX2 + FMA machines) that [`log1p_avx2`] gives the same bits.
+    /// machines with AVX2 + FMA, and AVX-512) that [`log1p_avx2`] and
+    /// [`log1p_avx512`] give the same bits.
     fn worst(xs: &[f64]) -> f64 {
         #[cfg(target_arch = "x86_64")]
         if crate::simd::has_avx2_fma() {
@@ -417,6 +462,21 @@ mod tests {
                 unsafe {
                     let y = log1p_avx2(_mm256_loadu_pd(v.as_ptr()));
                     _mm256_storeu_pd(out.as_mut_ptr(), y);
+                }
+                for (a, &x) in out.iter().zip(v) {
+                    assert_eq!(a.to_bits(), log1p(x).to_bits(), "{x:e}");
+                }
+            }
+        }
+        #[cfg(target_arch = "x86_64")]
+        if crate::simd::has_avx512f() {
+            use std::arch::x86_64::*;
+            for v in xs.chunks_exact(8) {
+                let mut out = [0.0; 8];
+                // SAFETY: AVX-512F checked above; 8 values in, 8 out.
+                unsafe {
+                    let y = log1p_avx512(_mm512_loadu_pd(v.as_ptr()));
+                    _mm512_storeu_pd(out.as_mut_ptr(), y);
                 }
                 for (a, &x) in out.iter().zip(v) {
                     assert_eq!(a.to_bits(), log1p(x).to_bits(), "{x:e}");
