@@ -235,3 +235,39 @@ fn a_views_domain_holds_it_and_is_at_most_four_times_its_size() {
         }
     }
 }
+
+/// The plan of a field (its refinement run on the per-pixel rule's rows)
+/// gives up only where the exact refinement would not fit its budget
+/// either: over views from the default one down to a hundredth of it and
+/// several budgets, every field the exact nodes build within budget is
+/// planned, and some the budget cannot hold are given up by the plan alone.
+#[test]
+fn the_plan_gives_up_only_fields_the_budget_cannot_hold() {
+    let tmp = tempfile::tempdir().unwrap();
+    let model = Model::open(fit(tmp.path(), 12, TransformKind::Log)).unwrap();
+    let latent = model.latent();
+    let around = [latent[(3, 0)], latent[(3, 1)]];
+    let mut views = vec![View::default()];
+    for zoom in [2.0, 4.0, 8.0, 16.0, 100.0] {
+        views.push(zoomed(around, zoom));
+        views.push(zoomed([0.137, -0.291], zoom));
+    }
+    let (mut built, mut skipped) = (0, 0);
+    for view in views {
+        let domain = brdf_atlas_core::field::domain_of(view);
+        for budget in [81, 300, 2000] {
+            let plan = model.plan_field(domain, budget).unwrap();
+            let exact = model.build_field(domain, budget).unwrap();
+            match (plan, exact) {
+                (None, Some(f)) => panic!(
+                    "{view:?}, budget {budget}: planned out, but {} exact nodes build it",
+                    f.nodes()
+                ),
+                (Some(_), Some(_)) => built += 1,
+                (None, None) => skipped += 1,
+                (Some(_), None) => {}
+            }
+        }
+    }
+    assert!(built > 0 && skipped > 0, "built {built}, skipped {skipped}");
+}

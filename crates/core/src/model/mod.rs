@@ -268,6 +268,9 @@ pub(crate) struct MapBasis {
     /// The dense rule's store rows and weights (`crate::query::field`'s
     /// `RuleRows`; held by type so that the model does not name the query).
     pub(crate) rule_rows: OnceLock<Box<dyn Any + Send + Sync>>,
+    /// The rows of the map's per-pixel rule at its default sample count,
+    /// which plan a field (`crate::query::field`'s `RuleRows`).
+    pub(crate) plan_rows: OnceLock<Box<dyn Any + Send + Sync>>,
     /// The last albedo fields built (`crate::query::field`'s `AlbedoField`),
     /// oldest first.
     pub(crate) fields: Mutex<Vec<Arc<dyn Any + Send + Sync>>>,

@@ -38,7 +38,11 @@
 //! thousands of nodes. So a map gives its field a budget
 //! ([`Model::field_budget`]): as many nodes as cost what integrating every
 //! pixel with the default quadrature would; a field that would need more is
-//! abandoned and the map integrates every pixel. Zoomed-in views, whose
+//! abandoned and the map integrates every pixel. Before any exact node, the
+//! field is planned ([`Model::plan_field`]): the same refinement on node
+//! values from the per-pixel rule's few hundred rows, which have detail at
+//! the same scale; a plan past twice the budget gives the field up at the
+//! cost of a few thousand cheap nodes. Zoomed-in views, whose
 //! albedo is nearly linear across them, get fields of a few dozen nodes.
 //!
 //! **Domains.** A view's domain is, per axis, the smallest interval of a
@@ -54,6 +58,7 @@
 use std::any::Any;
 use std::sync::Arc;
 
+use brdf_merl::Quadrature;
 use faer::Mat;
 
 use crate::data::store::Rows;
@@ -85,6 +90,9 @@ pub const MAX_DEPTH: usize = 4;
 /// A patch whose estimate is this many tolerances or more after a
 /// refinement is cut in four rather than refined further.
 pub const CUT_RATIO: f64 = 30.0;
+/// How many times its budget a field's plan ([`Model::plan_field`]) may
+/// take in nodes before the field is given up without exact nodes.
+pub const PLAN_FACTOR: usize = 2;
 /// Fields a model keeps for later maps.
 pub const FIELD_CACHE: usize = 8;
 /// Rows of the store a step of the exact pass multiplies at once.
@@ -171,38 +179,59 @@ impl AlbedoField {
 impl Model {
     /// The rows of the dense rule, built once.
     fn rule_rows(&self) -> &RuleRows {
-        let rows = self.map_basis().rule_rows.get_or_init(|| {
-            let rule = self.albedo_rule();
-            let store = self.store();
-            let bins = store.dims().bins();
-            let mut out = RuleRows {
-                rows: Vec::new(),
-                channel: Vec::new(),
-                weight: Vec::new(),
-                exponential: false,
-            };
-            for c in 0..3 {
-                for (&b, &w) in rule.bins().iter().zip(rule.weights()) {
-                    let row = c * bins + b as usize;
-                    if store.unmeasured()[row] != 0 {
-                        continue;
-                    }
-                    let scale = match self.transform().inverse_form(b as usize) {
-                        InverseForm::Linear(s) => s,
-                        InverseForm::Exp(s) => {
-                            out.exponential = true;
-                            s
-                        }
-                    };
-                    out.rows.push(row);
-                    out.channel.push(c as u8);
-                    out.weight.push(w * scale);
-                }
-            }
-            Box::new(out)
-        });
+        let rows = self
+            .map_basis()
+            .rule_rows
+            .get_or_init(|| Box::new(self.rows_of(self.albedo_rule())));
         rows.downcast_ref()
             .expect("the model's rule rows are RuleRows")
+    }
+
+    /// The rows of the map's per-pixel rule (the default sample count), with
+    /// which a field is planned before its exact nodes are paid for; built once.
+    fn plan_rows(&self) -> &RuleRows {
+        let rows = self.map_basis().plan_rows.get_or_init(|| {
+            let rule = Quadrature::with_samples_shaped(
+                self.albedo_rule(),
+                crate::query::map::DEFAULT_SAMPLES,
+                self.shape(),
+            );
+            Box::new(self.rows_of(&rule))
+        });
+        rows.downcast_ref()
+            .expect("the model's plan rows are RuleRows")
+    }
+
+    /// The store rows `rule` reads (measured ones only, channel-major), with
+    /// the rule's weight times the inverse transform's scale.
+    fn rows_of(&self, rule: &Quadrature) -> RuleRows {
+        let store = self.store();
+        let bins = store.dims().bins();
+        let mut out = RuleRows {
+            rows: Vec::new(),
+            channel: Vec::new(),
+            weight: Vec::new(),
+            exponential: false,
+        };
+        for c in 0..3 {
+            for (&b, &w) in rule.bins().iter().zip(rule.weights()) {
+                let row = c * bins + b as usize;
+                if store.unmeasured()[row] != 0 {
+                    continue;
+                }
+                let scale = match self.transform().inverse_form(b as usize) {
+                    InverseForm::Linear(s) => s,
+                    InverseForm::Exp(s) => {
+                        out.exponential = true;
+                        s
+                    }
+                };
+                out.rows.push(row);
+                out.channel.push(c as u8);
+                out.weight.push(w * scale);
+            }
+        }
+        out
     }
 
     /// The albedo of the full reconstruction at each point, integrated
@@ -212,6 +241,11 @@ impl Model {
     /// points' weights `K^-1 k(x)`. The sums are formed in a fixed order:
     /// the answer does not depend on the thread count.
     pub fn exact_albedos(&self, points: &[[f64; 2]]) -> Result<Vec<[f64; 3]>> {
+        self.albedos_over(self.rule_rows(), points)
+    }
+
+    /// [`Model::exact_albedos`] with the rows of another rule.
+    fn albedos_over(&self, rule: &RuleRows, points: &[[f64; 2]]) -> Result<Vec<[f64; 3]>> {
         self.store().verify_cheap()?;
         let m = points.len();
         if m == 0 {
@@ -231,7 +265,6 @@ impl Model {
             .flat_map(|t| (0..m).map(move |j| (t, j)))
             .map(|(t, j)| w[(t, j)])
             .collect();
-        let rule = self.rule_rows();
         let store = self.store();
         let mean = store.mean();
         // Products in f64 through the library's own kernel (faer's would
@@ -323,7 +356,13 @@ impl Model {
         if let Some(f) = cached(&lock(cache)) {
             return Ok(f.field.clone());
         }
-        let field = self.build_field(domain, budget)?.map(Arc::new);
+        // Plan with the per-pixel rule's rows first: a field that would
+        // need far more nodes than the budget is given up before any
+        // exact node is paid for.
+        let field = match self.plan_field(domain, budget)? {
+            Some(_) => self.build_field(domain, budget)?.map(Arc::new),
+            None => None,
+        };
         let mut cache = lock(cache);
         if cached(&cache).is_none() {
             cache.retain(|f| {
@@ -351,6 +390,32 @@ impl Model {
         let rows = self.rule_rows().rows.len().max(1) as f64;
         let per_pixel = 3.0 * samples as f64;
         ((pixels as f64 * per_pixel / rows) as usize).max(MIN_NODES)
+    }
+
+    /// Plan the field of `domain`: the same refinement as
+    /// [`Model::build_field`], with node values from the map's per-pixel rule
+    /// ([`DEFAULT_SAMPLES`](crate::DEFAULT_SAMPLES) samples: about 800 rows
+    /// against 3.3 million, and like the exact albedo a sum of smooth
+    /// functions of the point, so with detail at the same scale). The nodes
+    /// it took, or `None` past [`PLAN_FACTOR`] times `budget`: a domain whose
+    /// albedo has detail much finer than itself, which the exact field would
+    /// not fit in its budget either.
+    pub fn plan_field(&self, domain: View, budget: usize) -> Result<Option<usize>> {
+        let mut nodes = 0;
+        let cap = PLAN_FACTOR.saturating_mul(budget);
+        let plan = refine(domain, 3, &LEVELS, ALBEDO_TOLERANCE, 0, &mut |pts| {
+            nodes += pts.len();
+            if nodes > cap {
+                return Ok(None);
+            }
+            Ok(Some(
+                self.albedos_over(self.plan_rows(), pts)?
+                    .into_iter()
+                    .flatten()
+                    .collect(),
+            ))
+        })?;
+        Ok(plan.map(|_| nodes))
     }
 
     /// Build the field of `domain` (no cache), or `None` if its albedo would
