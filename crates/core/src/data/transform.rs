@@ -231,7 +231,8 @@ impl Transform for CosineLog {
 }
 
 /// The loop of [`CosineLog::forward_raw_run`]: plain arithmetic and
-/// [`fastlog::log1p`], which [`cosine_log_avx2`] matches bit for bit.
+/// [`fastlog::log1p`], which [`cosine_log_avx2`] and [`cosine_log_avx512`]
+/// match bit for bit.
 #[inline(always)]
 fn cosine_log(scale: f64, raw: &[f64], cos: &[f64], out: &mut [f64]) {
     for ((o, &v), &c) in out.iter_mut().zip(raw).zip(cos) {

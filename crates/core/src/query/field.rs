@@ -41,8 +41,10 @@
 //! abandoned and the map integrates every pixel. Before any exact node, the
 //! field is planned ([`Model::plan_field`]): the same refinement on node
 //! values from the per-pixel rule's few hundred rows, which have detail at
-//! the same scale; a plan past twice the budget gives the field up at the
-//! cost of a few thousand cheap nodes. Zoomed-in views, whose
+//! about the same scale; a plan past twice the budget gives the field up
+//! at the cost of at most that many cheap nodes (a judgement, not a bound:
+//! the plan's values come from another rule; measured to agree with the
+//! exact refinement in docs/performance.md). Zoomed-in views, whose
 //! albedo is nearly linear across them, get fields of a few dozen nodes.
 //!
 //! **Domains.** A view's domain is, per axis, the smallest interval of a
@@ -58,18 +60,11 @@
 use std::any::Any;
 use std::sync::Arc;
 
-use brdf_merl::Quadrature;
-use faer::Mat;
-
-use crate::data::store::Rows;
-use crate::data::transform::InverseForm;
 use crate::dense::product::matmul;
 use crate::error::Result;
 use crate::model::Model;
 use crate::query::view::View;
 use crate::simd::dot;
-use crate::simd::fastexp;
-use crate::simd::fold::{GROUPS, ordered_blocks};
 
 /// The largest error of the albedo interpolant allowed at a refinement's new
 /// nodes, relative to the node's largest channel: 0.25%.
@@ -95,21 +90,6 @@ pub const CUT_RATIO: f64 = 30.0;
 pub const PLAN_FACTOR: usize = 2;
 /// Fields a model keeps for later maps.
 pub const FIELD_CACHE: usize = 8;
-/// Rows of the store a step of the exact pass multiplies at once.
-const BLOCK: usize = 256;
-
-/// The rows of the store the dense rule reads, with what turns a row's
-/// reconstructed value into its share of the albedo.
-pub(crate) struct RuleRows {
-    /// Store rows (channel-major), ascending within each channel.
-    rows: Vec<usize>,
-    /// The channel of each row.
-    channel: Vec<u8>,
-    /// Quadrature weight times the inverse transform's scale.
-    weight: Vec<f64>,
-    /// `max(0, e^t - 1)` (log) rather than `max(0, t)` (raw).
-    exponential: bool,
-}
 
 /// A patch of the plane with a tensor grid of exact values, and the
 /// polynomial through them.
@@ -177,150 +157,6 @@ impl AlbedoField {
 }
 
 impl Model {
-    /// The rows of the dense rule, built once.
-    fn rule_rows(&self) -> &RuleRows {
-        let rows = self
-            .map_basis()
-            .rule_rows
-            .get_or_init(|| Box::new(self.rows_of(self.albedo_rule())));
-        rows.downcast_ref()
-            .expect("the model's rule rows are RuleRows")
-    }
-
-    /// The rows of the map's per-pixel rule (the default sample count), with
-    /// which a field is planned before its exact nodes are paid for; built once.
-    fn plan_rows(&self) -> &RuleRows {
-        let rows = self.map_basis().plan_rows.get_or_init(|| {
-            let rule = Quadrature::with_samples_shaped(
-                self.albedo_rule(),
-                crate::query::map::DEFAULT_SAMPLES,
-                self.shape(),
-            );
-            Box::new(self.rows_of(&rule))
-        });
-        rows.downcast_ref()
-            .expect("the model's plan rows are RuleRows")
-    }
-
-    /// The store rows `rule` reads (measured ones only, channel-major), with
-    /// the rule's weight times the inverse transform's scale.
-    fn rows_of(&self, rule: &Quadrature) -> RuleRows {
-        let store = self.store();
-        let bins = store.dims().bins();
-        let mut out = RuleRows {
-            rows: Vec::new(),
-            channel: Vec::new(),
-            weight: Vec::new(),
-            exponential: false,
-        };
-        for c in 0..3 {
-            for (&b, &w) in rule.bins().iter().zip(rule.weights()) {
-                let row = c * bins + b as usize;
-                if store.unmeasured()[row] != 0 {
-                    continue;
-                }
-                let scale = match self.transform().inverse_form(b as usize) {
-                    InverseForm::Linear(s) => s,
-                    InverseForm::Exp(s) => {
-                        out.exponential = true;
-                        s
-                    }
-                };
-                out.rows.push(row);
-                out.channel.push(c as u8);
-                out.weight.push(w * scale);
-            }
-        }
-        out
-    }
-
-    /// The albedo of the full reconstruction at each point, integrated
-    /// with the dense rule ([`Model::albedo_rule`]; negative reconstructed
-    /// values count as 0, unmeasured bins are left out). One pass over the
-    /// store for all points: each block of rows is one product with the
-    /// points' weights `K^-1 k(x)`. The sums are formed in a fixed order:
-    /// the answer does not depend on the thread count.
-    pub fn exact_albedos(&self, points: &[[f64; 2]]) -> Result<Vec<[f64; 3]>> {
-        self.albedos_over(self.rule_rows(), points)
-    }
-
-    /// [`Model::exact_albedos`] with the rows of another rule.
-    fn albedos_over(&self, rule: &RuleRows, points: &[[f64; 2]]) -> Result<Vec<[f64; 3]>> {
-        self.store().verify_cheap()?;
-        let m = points.len();
-        if m == 0 {
-            return Ok(Vec::new());
-        }
-        for p in points {
-            self.kernel_and_weights_at(p)?;
-        }
-        let (latent, kernel) = (self.latent(), self.file().kernel);
-        let n = latent.nrows();
-        let kx = Mat::from_fn(n, m, |i, j| {
-            kernel.eval(&[latent[(i, 0)], latent[(i, 1)]], &points[j])
-        });
-        let w = self.llt_solve(&kx);
-        // W^T column-major (m x n), so a block's values are W^T Z_block.
-        let a: Vec<f64> = (0..n)
-            .flat_map(|t| (0..m).map(move |j| (t, j)))
-            .map(|(t, j)| w[(t, j)])
-            .collect();
-        let store = self.store();
-        let mean = store.mean();
-        // Products in f64 through the library's own kernel (faer's would
-        // reserve twice the reported L3 cache in each thread).
-        let parts = ordered_blocks(
-            rule.rows.len(),
-            BLOCK,
-            GROUPS,
-            || vec![0.0f64; 3 * m],
-            |acc, range| {
-                SCRATCH.with_borrow_mut(|s| {
-                    let len = range.len();
-                    s.t64.resize(m * len, 0.0);
-                    s.z64.resize(n * len, 0.0);
-                    let rows = &rule.rows[range.clone()];
-                    for (k, &row) in rows.iter().enumerate() {
-                        let out = &mut s.z64[k * n..(k + 1) * n];
-                        match store.z() {
-                            Rows::F32(z) => out
-                                .iter_mut()
-                                .zip(&z[row * n..(row + 1) * n])
-                                .for_each(|(o, v)| *o = f64::from(*v)),
-                            Rows::F64(z) => out.copy_from_slice(&z[row * n..(row + 1) * n]),
-                        }
-                    }
-                    matmul(&mut s.t64, &a, &s.z64, n);
-                    for (k, r) in range.enumerate() {
-                        let (mu, wt) = (mean[rule.rows[r]], rule.weight[r]);
-                        let c = rule.channel[r] as usize;
-                        let acc = &mut acc[c * m..(c + 1) * m];
-                        let t = &s.t64[k * m..(k + 1) * m];
-                        if rule.exponential {
-                            for (o, t) in acc.iter_mut().zip(t) {
-                                *o += wt * (fastexp::exp(mu + t) - 1.0).max(0.0);
-                            }
-                        } else {
-                            for (o, t) in acc.iter_mut().zip(t) {
-                                *o += wt * (mu + t).max(0.0);
-                            }
-                        }
-                    }
-                })
-            },
-        );
-        let mut out = vec![[0.0f64; 3]; m];
-        for acc in parts {
-            for (j, o) in out.iter_mut().enumerate() {
-                for (c, oc) in o.iter_mut().enumerate() {
-                    *oc += acc[c * m + j];
-                }
-            }
-        }
-        self.verify()?;
-        Ok(out)
-    }
-
     /// The exact predictive variance `1 - k^T K^-1 k` at each point.
     fn exact_variances(&self, points: &[[f64; 2]]) -> Vec<f64> {
         let (latent, kernel) = (self.latent(), self.file().kernel);
@@ -387,7 +223,7 @@ impl Model {
     /// would (a node reads every row of the dense rule, a pixel about three
     /// rows a sample), and at least [`MIN_NODES`].
     pub fn field_budget(&self, pixels: usize, samples: usize) -> usize {
-        let rows = self.rule_rows().rows.len().max(1) as f64;
+        let rows = self.rule_row_count().max(1) as f64;
         let per_pixel = 3.0 * samples as f64;
         ((pixels as f64 * per_pixel / rows) as usize).max(MIN_NODES)
     }
@@ -396,10 +232,11 @@ impl Model {
     /// [`Model::build_field`], with node values from the map's per-pixel rule
     /// ([`DEFAULT_SAMPLES`](crate::DEFAULT_SAMPLES) samples: about 800 rows
     /// against 3.3 million, and like the exact albedo a sum of smooth
-    /// functions of the point, so with detail at the same scale). The nodes
-    /// it took, or `None` past [`PLAN_FACTOR`] times `budget`: a domain whose
-    /// albedo has detail much finer than itself, which the exact field would
-    /// not fit in its budget either.
+    /// functions of the point, so with detail at about the same scale). The
+    /// nodes it took, or `None` past [`PLAN_FACTOR`] times `budget`: a domain
+    /// whose albedo has detail much finer than itself, which the exact field
+    /// is then judged not to fit in its budget either (the plan's values
+    /// come from another rule, so this is a judgement, not a bound).
     pub fn plan_field(&self, domain: View, budget: usize) -> Result<Option<usize>> {
         let mut nodes = 0;
         let cap = PLAN_FACTOR.saturating_mul(budget);
@@ -473,18 +310,6 @@ pub(crate) fn variances(inv: &[f64], kx: &[f64], n: usize, out: &mut [f32]) {
     {
         *o = (1.0 - dot::dot(k, w)).clamp(0.0, 1.0) as f32;
     }
-}
-
-/// A worker's buffers for [`Model::exact_albedos`]: a block of rows and
-/// its values at the nodes (kept between calls, so a pass allocates nothing).
-#[derive(Default)]
-struct Scratch {
-    z64: Vec<f64>,
-    t64: Vec<f64>,
-}
-
-thread_local! {
-    static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch::default());
 }
 
 fn lock<T>(m: &std::sync::Mutex<T>) -> std::sync::MutexGuard<'_, T> {

@@ -5,6 +5,7 @@
 pub(crate) mod budget;
 pub mod contour;
 mod decor;
+mod exact;
 pub mod field;
 mod labels;
 pub mod locate;

@@ -1,0 +1,200 @@
+//! Exact albedos at latent points: the dense rule (or another rule's rows)
+//! over the full reconstruction, all the points in one pass over the store.
+//!
+//! The albedo field ([`crate::query::field`]) takes its nodes from here,
+//! and plans its refinement on the rows of the map's per-pixel rule, a few
+//! hundred instead of millions, before paying for exact nodes.
+
+use brdf_merl::Quadrature;
+use faer::Mat;
+
+use crate::data::store::Rows;
+use crate::data::transform::InverseForm;
+use crate::dense::product::matmul;
+use crate::error::Result;
+use crate::model::Model;
+use crate::simd::fastexp;
+use crate::simd::fold::{GROUPS, ordered_blocks};
+
+/// Rows of the store a step of the exact pass multiplies at once.
+const BLOCK: usize = 256;
+
+/// The rows of the store the dense rule reads, with what turns a row's
+/// reconstructed value into its share of the albedo.
+pub(crate) struct RuleRows {
+    /// Store rows (channel-major), ascending within each channel.
+    rows: Vec<usize>,
+    /// The channel of each row.
+    channel: Vec<u8>,
+    /// Quadrature weight times the inverse transform's scale.
+    weight: Vec<f64>,
+    /// `max(0, e^t - 1)` (log) rather than `max(0, t)` (raw).
+    exponential: bool,
+}
+
+impl Model {
+    /// How many store rows the dense rule reads (measured ones only).
+    pub(crate) fn rule_row_count(&self) -> usize {
+        self.rule_rows().rows.len()
+    }
+
+    /// The rows of the dense rule, built once.
+    pub(crate) fn rule_rows(&self) -> &RuleRows {
+        let rows = self
+            .map_basis()
+            .rule_rows
+            .get_or_init(|| Box::new(self.rows_of(self.albedo_rule())));
+        rows.downcast_ref()
+            .expect("the model's rule rows are RuleRows")
+    }
+
+    /// The rows of the map's per-pixel rule (the default sample count), with
+    /// which a field is planned before its exact nodes are paid for; built once.
+    pub(crate) fn plan_rows(&self) -> &RuleRows {
+        let rows = self.map_basis().plan_rows.get_or_init(|| {
+            let rule = Quadrature::with_samples_shaped(
+                self.albedo_rule(),
+                crate::query::map::DEFAULT_SAMPLES,
+                self.shape(),
+            );
+            Box::new(self.rows_of(&rule))
+        });
+        rows.downcast_ref()
+            .expect("the model's plan rows are RuleRows")
+    }
+
+    /// The store rows `rule` reads (measured ones only, channel-major), with
+    /// the rule's weight times the inverse transform's scale.
+    fn rows_of(&self, rule: &Quadrature) -> RuleRows {
+        let store = self.store();
+        let bins = store.dims().bins();
+        let mut out = RuleRows {
+            rows: Vec::new(),
+            channel: Vec::new(),
+            weight: Vec::new(),
+            exponential: false,
+        };
+        for c in 0..3 {
+            for (&b, &w) in rule.bins().iter().zip(rule.weights()) {
+                let row = c * bins + b as usize;
+                if store.unmeasured()[row] != 0 {
+                    continue;
+                }
+                let scale = match self.transform().inverse_form(b as usize) {
+                    InverseForm::Linear(s) => s,
+                    InverseForm::Exp(s) => {
+                        out.exponential = true;
+                        s
+                    }
+                };
+                out.rows.push(row);
+                out.channel.push(c as u8);
+                out.weight.push(w * scale);
+            }
+        }
+        out
+    }
+
+    /// The albedo of the full reconstruction at each point, integrated
+    /// with the dense rule ([`Model::albedo_rule`]; negative reconstructed
+    /// values count as 0, unmeasured bins are left out). One pass over the
+    /// store for all points: each block of rows is one product with the
+    /// points' weights `K^-1 k(x)`. The sums are formed in a fixed order:
+    /// the answer does not depend on the thread count.
+    pub fn exact_albedos(&self, points: &[[f64; 2]]) -> Result<Vec<[f64; 3]>> {
+        self.albedos_over(self.rule_rows(), points)
+    }
+
+    /// [`Model::exact_albedos`] with the rows of another rule.
+    pub(crate) fn albedos_over(
+        &self,
+        rule: &RuleRows,
+        points: &[[f64; 2]],
+    ) -> Result<Vec<[f64; 3]>> {
+        self.store().verify_cheap()?;
+        let m = points.len();
+        if m == 0 {
+            return Ok(Vec::new());
+        }
+        for p in points {
+            self.kernel_and_weights_at(p)?;
+        }
+        let (latent, kernel) = (self.latent(), self.file().kernel);
+        let n = latent.nrows();
+        let kx = Mat::from_fn(n, m, |i, j| {
+            kernel.eval(&[latent[(i, 0)], latent[(i, 1)]], &points[j])
+        });
+        let w = self.llt_solve(&kx);
+        // W^T column-major (m x n), so a block's values are W^T Z_block.
+        let a: Vec<f64> = (0..n)
+            .flat_map(|t| (0..m).map(move |j| (t, j)))
+            .map(|(t, j)| w[(t, j)])
+            .collect();
+        let store = self.store();
+        let mean = store.mean();
+        // Products in f64 through the library's own kernel (faer's would
+        // reserve twice the reported L3 cache in each thread).
+        let parts = ordered_blocks(
+            rule.rows.len(),
+            BLOCK,
+            GROUPS,
+            || vec![0.0f64; 3 * m],
+            |acc, range| {
+                SCRATCH.with_borrow_mut(|s| {
+                    let len = range.len();
+                    s.t64.resize(m * len, 0.0);
+                    s.z64.resize(n * len, 0.0);
+                    let rows = &rule.rows[range.clone()];
+                    for (k, &row) in rows.iter().enumerate() {
+                        let out = &mut s.z64[k * n..(k + 1) * n];
+                        match store.z() {
+                            Rows::F32(z) => out
+                                .iter_mut()
+                                .zip(&z[row * n..(row + 1) * n])
+                                .for_each(|(o, v)| *o = f64::from(*v)),
+                            Rows::F64(z) => out.copy_from_slice(&z[row * n..(row + 1) * n]),
+                        }
+                    }
+                    matmul(&mut s.t64, &a, &s.z64, n);
+                    for (k, r) in range.enumerate() {
+                        let (mu, wt) = (mean[rule.rows[r]], rule.weight[r]);
+                        let c = rule.channel[r] as usize;
+                        let acc = &mut acc[c * m..(c + 1) * m];
+                        let t = &s.t64[k * m..(k + 1) * m];
+                        if rule.exponential {
+                            for (o, t) in acc.iter_mut().zip(t) {
+                                *o += wt * (fastexp::exp(mu + t) - 1.0).max(0.0);
+                            }
+                        } else {
+                            for (o, t) in acc.iter_mut().zip(t) {
+                                *o += wt * (mu + t).max(0.0);
+                            }
+                        }
+                    }
+                })
+            },
+        );
+        let mut out = vec![[0.0f64; 3]; m];
+        for acc in parts {
+            for (j, o) in out.iter_mut().enumerate() {
+                for (c, oc) in o.iter_mut().enumerate() {
+                    *oc += acc[c * m + j];
+                }
+            }
+        }
+        self.verify()?;
+        Ok(out)
+    }
+}
+
+/// A worker's buffers for [`Model::exact_albedos`]: a block of rows and
+/// its values at the nodes (kept between calls, so a pass allocates nothing).
+#[derive(Default)]
+struct Scratch {
+    z64: Vec<f64>,
+    t64: Vec<f64>,
+}
+
+thread_local! {
+    static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch::default());
+}
