@@ -265,11 +265,11 @@ pub(crate) struct MapBasis {
     pub(crate) linear: OnceLock<([Vec<f64>; 3], [f64; 3])>,
     /// The mean material's shape inside each quadrature box.
     pub(crate) shape: OnceLock<Vec<f64>>,
-    /// The dense rule's store rows and weights (`crate::query::field`'s
+    /// The dense rule's store rows and weights (`crate::query::exact`'s
     /// `RuleRows`; held by type so that the model does not name the query).
     pub(crate) rule_rows: OnceLock<Box<dyn Any + Send + Sync>>,
     /// The rows of the map's per-pixel rule at its default sample count,
-    /// which plan a field (`crate::query::field`'s `RuleRows`).
+    /// which plan a field (`crate::query::exact`'s `RuleRows`).
     pub(crate) plan_rows: OnceLock<Box<dyn Any + Send + Sync>>,
     /// The last albedo fields built (`crate::query::field`'s `AlbedoField`),
     /// oldest first.
