@@ -79,9 +79,9 @@ fn leave_one_out(w: &mut dyn Write, plan: &Plan, r: &Results) -> io::Result<()> 
          `z_i - (K^-1 Z)_i / (K^-1)_ii` in closed form, with the mean material also \
          re-estimated without it (closed form too); the latent points and \
          hyperparameters are those fitted on all {n} materials (no refit), so the \
-         held-out material still shaped where it sits. Fits by {} (minimum step \
-         1e-3 for Hooke-Jeeves, the default optimiser of `fit`), and at q = 2 by {} \
-         too. **PCA held out**: the \
+         held-out material still shaped where it sits. Fits by {} (L-BFGS is \
+         `fit`'s default; Hooke-Jeeves runs with minimum step 1e-3), and at q = 2 \
+         by {} too. **PCA held out**: the \
          material projected on the top q principal directions of the other {} \
          materials, centred by their own mean (a proper leave-one-out, one \
          eigen-decomposition of their Gram matrix per material). **PCA in sample** \
