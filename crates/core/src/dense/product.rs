@@ -46,9 +46,9 @@ pub fn matmul(c: &mut [f64], a: &[f64], b: &[f64], k: usize) {
 /// [`matmul`] on one thread (`k > 0`, shapes checked).
 fn columns(c: &mut [f64], a: &[f64], b: &[f64], k: usize) {
     let (m, p) = (a.len() / k, b.len() / k);
-    let (m8, p4) = (m / 8 * 8, p / 4 * 4);
     #[cfg(target_arch = "x86_64")]
     if crate::simd::has_avx2_fma() {
+        let (m8, p4) = (m / 8 * 8, p / 4 * 4);
         // Rows in tiles of 16 where the CPU has AVX-512, the rest (and all
         // of them elsewhere) in tiles of 8.
         let m16 = if crate::simd::has_avx512f() {
@@ -60,24 +60,17 @@ fn columns(c: &mut [f64], a: &[f64], b: &[f64], k: usize) {
         };
         // SAFETY: the CPU has AVX2 and FMA (checked above).
         unsafe { tiles_avx2(c, a, b, (m, k, p), m16) };
-    } else {
-        tiles_portable(c, a, b, (m, k, p), (m8, p4));
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    tiles_portable(c, a, b, (m, k, p), (m8, p4));
-    // Edges: the last rows of every column, then the last columns; with
-    // the CPU's FMA instruction where it has one (`mul_add` is a libm call
-    // in a build without it).
-    #[cfg(target_arch = "x86_64")]
-    if crate::simd::has_avx2_fma() {
-        // SAFETY: the CPU has AVX2 and FMA (checked just above).
+        // The edges with the FMA instruction (`mul_add` is a libm call in a
+        // build without it). SAFETY: as above.
         unsafe { edges_fma(c, a, b, (m, k, p), (m8, p4)) };
         return;
     }
-    edges(c, a, b, (m, k, p), (m8, p4));
+    // Without the vector paths no tile covers anything: every output is an edge.
+    edges(c, a, b, (m, k, p), (0, 0));
 }
 
-/// The outputs no tile covers, one at a time.
+/// The outputs no tile covers (the last rows of every column, then the
+/// last columns), one at a time.
 #[inline(always)]
 fn edges(
     c: &mut [f64],
@@ -119,20 +112,6 @@ fn one(a: &[f64], b: &[f64], (m, k): (usize, usize), r: usize, col: usize) -> f6
         s = a[t * m + r].mul_add(*bt, s);
     }
     s
-}
-
-fn tiles_portable(
-    c: &mut [f64],
-    a: &[f64],
-    b: &[f64],
-    (m, k, _): (usize, usize, usize),
-    (m8, p4): (usize, usize),
-) {
-    for col in 0..p4 {
-        for r in 0..m8 {
-            c[col * m + r] = one(a, b, (m, k), r, col);
-        }
-    }
 }
 
 /// Tiles of 16 rows x 4 columns: two loads of `A` and four broadcasts of

@@ -19,17 +19,18 @@ use crate::simd::fold::{GROUPS, ordered_blocks};
 /// Rows of the store a step of the exact pass multiplies at once.
 const BLOCK: usize = 256;
 
-/// The rows of the store the dense rule reads, with what turns a row's
-/// reconstructed value into its share of the albedo.
+/// The rows of the store a rule (the dense one, or a map's per-pixel one)
+/// reads, with what turns a row's reconstructed value into its share of the
+/// albedo.
 pub(crate) struct RuleRows {
     /// Store rows (channel-major), ascending within each channel.
-    rows: Vec<usize>,
+    pub(crate) rows: Vec<usize>,
     /// The channel of each row.
-    channel: Vec<u8>,
+    pub(crate) channel: Vec<u8>,
     /// Quadrature weight times the inverse transform's scale.
-    weight: Vec<f64>,
+    pub(crate) weight: Vec<f64>,
     /// `max(0, e^t - 1)` (log) rather than `max(0, t)` (raw).
-    exponential: bool,
+    pub(crate) exponential: bool,
 }
 
 impl Model {
@@ -65,7 +66,7 @@ impl Model {
 
     /// The store rows `rule` reads (measured ones only, channel-major), with
     /// the rule's weight times the inverse transform's scale.
-    fn rows_of(&self, rule: &Quadrature) -> RuleRows {
+    pub(crate) fn rows_of(&self, rule: &Quadrature) -> RuleRows {
         let store = self.store();
         let bins = store.dims().bins();
         let mut out = RuleRows {

@@ -63,6 +63,7 @@ use std::sync::Arc;
 use crate::dense::product::matmul;
 use crate::error::Result;
 use crate::model::Model;
+use crate::query::exact::RuleRows;
 use crate::query::view::View;
 use crate::simd::dot;
 
@@ -238,37 +239,39 @@ impl Model {
     /// is then judged not to fit in its budget either (the plan's values
     /// come from another rule, so this is a judgement, not a bound).
     pub fn plan_field(&self, domain: View, budget: usize) -> Result<Option<usize>> {
-        let mut nodes = 0;
         let cap = PLAN_FACTOR.saturating_mul(budget);
-        let plan = refine(domain, 3, &LEVELS, ALBEDO_TOLERANCE, 0, &mut |pts| {
-            nodes += pts.len();
-            if nodes > cap {
-                return Ok(None);
-            }
-            Ok(Some(
-                self.albedos_over(self.plan_rows(), pts)?
-                    .into_iter()
-                    .flatten()
-                    .collect(),
-            ))
-        })?;
-        Ok(plan.map(|_| nodes))
+        let plan = self.albedo_patches(domain, cap, self.plan_rows())?;
+        Ok(plan.map(|(_, nodes)| nodes))
     }
 
-    /// Build the field of `domain` (no cache), or `None` if its albedo would
-    /// need more than `budget` exact nodes.
-    pub fn build_field(&self, domain: View, budget: usize) -> Result<Option<AlbedoField>> {
+    /// The albedo's patches over `domain` with node values from `rows`, and
+    /// the nodes they took; `None` past `budget` nodes.
+    fn albedo_patches(
+        &self,
+        domain: View,
+        budget: usize,
+        rows: &RuleRows,
+    ) -> Result<Option<(Vec<Patch>, usize)>> {
         let mut nodes = 0;
-        let albedo = refine(domain, 3, &LEVELS, ALBEDO_TOLERANCE, 0, &mut |pts| {
+        let patches = refine(domain, 3, &LEVELS, ALBEDO_TOLERANCE, 0, &mut |pts| {
             nodes += pts.len();
             if nodes > budget {
                 return Ok(None);
             }
             Ok(Some(
-                self.exact_albedos(pts)?.into_iter().flatten().collect(),
+                self.albedos_over(rows, pts)?
+                    .into_iter()
+                    .flatten()
+                    .collect(),
             ))
         })?;
-        let Some(albedo) = albedo else {
+        Ok(patches.map(|p| (p, nodes)))
+    }
+
+    /// Build the field of `domain` (no cache), or `None` if its albedo would
+    /// need more than `budget` exact nodes.
+    pub fn build_field(&self, domain: View, budget: usize) -> Result<Option<AlbedoField>> {
+        let Some((albedo, nodes)) = self.albedo_patches(domain, budget, self.rule_rows())? else {
             return Ok(None);
         };
         let variance = refine(

@@ -25,7 +25,6 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::data::store::Rows;
-use crate::data::transform::InverseForm;
 use crate::dense::product::matmul;
 use crate::error::{CoreError, Result};
 use crate::model::Model;
@@ -259,33 +258,16 @@ impl Model {
                 let rule =
                     Quadrature::with_samples_shaped(self.albedo_rule(), s.max(1), self.shape());
                 let store = self.store();
-                let bins = store.dims().bins();
                 // The rows the rule reads (measured ones only), grouped by channel,
                 // with the quadrature weight folded into the inverse's scale.
-                let mut rows = Vec::new();
-                let mut exponential = false;
-                for c in 0..3 {
-                    for (&b, &w) in rule.bins().iter().zip(rule.weights()) {
-                        let row = c * bins + b as usize;
-                        if store.unmeasured()[row] == 0 {
-                            let scale = match self.transform().inverse_form(b as usize) {
-                                InverseForm::Linear(s) => s,
-                                InverseForm::Exp(s) => {
-                                    exponential = true;
-                                    s
-                                }
-                            };
-                            rows.push((row, c, w * scale));
-                        }
-                    }
-                }
-                let r = rows.len();
+                let rows = self.rows_of(&rule);
+                let r = rows.rows.len();
                 let ends: Vec<usize> = (0..3)
-                    .map(|c| rows.iter().filter(|x| x.1 <= c).count())
+                    .map(|c| rows.channel.iter().filter(|&&x| x as usize <= c).count())
                     .collect();
                 let zq = Mat::from_fn(n, r, |i, j| match store.z() {
-                    Rows::F32(z) => z[rows[j].0 * n + i] as f64,
-                    Rows::F64(z) => z[rows[j].0 * n + i],
+                    Rows::F32(z) => z[rows.rows[j] * n + i] as f64,
+                    Rows::F64(z) => z[rows.rows[j] * n + i],
                 });
                 // C^T = K^-1 Z_q^T, so that the values at x are mean + C k(x);
                 // C column-major (r x n) for the product.
@@ -294,8 +276,8 @@ impl Model {
                     .flat_map(|i| (0..r).map(move |j| (i, j)))
                     .map(|(i, j)| ct[(i, j)])
                     .collect();
-                let mean: Vec<f64> = rows.iter().map(|&(row, ..)| store.mean()[row]).collect();
-                let weight: Vec<f64> = rows.iter().map(|x| x.2).collect();
+                let mean: Vec<f64> = rows.rows.iter().map(|&row| store.mean()[row]).collect();
+                let (weight, exponential) = (&rows.weight, rows.exponential);
                 rgb.par_chunks_mut(width)
                     .zip(variance.par_chunks_mut(width))
                     .enumerate()
@@ -307,7 +289,7 @@ impl Model {
                         for (px, o) in out.iter_mut().enumerate() {
                             let col = &vbuf[px * r..(px + 1) * r];
                             // Element-wise first (vectorises), then a fixed-order sum.
-                            let it = terms.iter_mut().zip(&mean).zip(&weight).zip(col);
+                            let it = terms.iter_mut().zip(&mean).zip(weight).zip(col);
                             if exponential {
                                 it.for_each(|(((o, m), w), t)| {
                                     *o = w * (fastexp::exp(m + t) - 1.0).max(0.0)
