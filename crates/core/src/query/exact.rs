@@ -8,7 +8,6 @@
 use brdf_merl::Quadrature;
 use faer::Mat;
 
-use crate::data::store::Rows;
 use crate::data::transform::InverseForm;
 use crate::dense::product::matmul;
 use crate::error::Result;
@@ -147,14 +146,7 @@ impl Model {
                     s.z64.resize(n * len, 0.0);
                     let rows = &rule.rows[range.clone()];
                     for (k, &row) in rows.iter().enumerate() {
-                        let out = &mut s.z64[k * n..(k + 1) * n];
-                        match store.z() {
-                            Rows::F32(z) => out
-                                .iter_mut()
-                                .zip(&z[row * n..(row + 1) * n])
-                                .for_each(|(o, v)| *o = f64::from(*v)),
-                            Rows::F64(z) => out.copy_from_slice(&z[row * n..(row + 1) * n]),
-                        }
+                        store.copy_rows(row, &mut s.z64[k * n..(k + 1) * n]);
                     }
                     matmul(&mut s.t64, &a, &s.z64, n);
                     for (k, r) in range.enumerate() {
