@@ -15,6 +15,11 @@ use crate::model::Model;
 use crate::simd::fastexp;
 use crate::simd::fold::{GROUPS, ordered_blocks};
 
+/// Quadrature samples per pixel when a map needs them (non-linear transforms)
+/// and the caller gives none; docs/performance.md says what it buys. Defined
+/// here, beside the rows it plans fields with, and re-exported by the map.
+pub const DEFAULT_SAMPLES: usize = 256;
+
 /// Rows of the store a step of the exact pass multiplies at once.
 const BLOCK: usize = 256;
 
@@ -52,11 +57,8 @@ impl Model {
     /// which a field is planned before its exact nodes are paid for; built once.
     pub(crate) fn plan_rows(&self) -> &RuleRows {
         let rows = self.map_basis().plan_rows.get_or_init(|| {
-            let rule = Quadrature::with_samples_shaped(
-                self.albedo_rule(),
-                crate::query::map::DEFAULT_SAMPLES,
-                self.shape(),
-            );
+            let rule =
+                Quadrature::with_samples_shaped(self.albedo_rule(), DEFAULT_SAMPLES, self.shape());
             Box::new(self.rows_of(&rule))
         });
         rows.downcast_ref()

@@ -34,9 +34,7 @@ pub use crate::query::view::View;
 use crate::simd::dot;
 use crate::simd::fastexp;
 
-/// Quadrature samples per pixel when a map needs them (non-linear transforms)
-/// and the caller gives none; docs/performance.md says what it buys.
-pub const DEFAULT_SAMPLES: usize = 256;
+pub use crate::query::exact::DEFAULT_SAMPLES;
 
 /// How a map's albedo was computed.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
