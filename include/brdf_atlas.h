@@ -172,6 +172,11 @@ typedef enum BrdfAtlasStatus {
      * Another failure; the message says what.
      */
     BRDF_ATLAS_STATUS_OTHER = 10,
+    /**
+     * The caller cancelled the call through its cancel flag; nothing was
+     * written.
+     */
+    BRDF_ATLAS_STATUS_CANCELLED = 11,
 } BrdfAtlasStatus;
 
 /**
@@ -747,6 +752,33 @@ enum BrdfAtlasStatus brdf_atlas_model_albedo_map(const struct BrdfAtlasModel *mo
                                                  size_t samples,
                                                  float *buf,
                                                  size_t len);
+
+/**
+ * `brdf_atlas_model_albedo_map` that its caller can cancel from another
+ * thread: the call reads `*cancel` now and then (atomically, relaxed
+ * order), and once it is non-zero stops within a map row or a step of the
+ * albedo field's refinement, writes nothing and returns CANCELLED. `cancel`
+ * is a `std::atomic<int32_t>` (C++) or `_Atomic int32_t` (C11) that stays
+ * alive for the call; set it to 1 and never back to 0 during the call. A
+ * viewer that moves on to another window cancels the stale map, so the
+ * cores are free for the new one at once.
+ *
+ * Returns what `brdf_atlas_model_albedo_map` returns, NULL_ARGUMENT when
+ * `cancel` is NULL, and CANCELLED.
+ *
+ * # Safety
+ * As `brdf_atlas_model_albedo_map`; `cancel` is NULL or points to an
+ * aligned 32-bit integer that every thread accesses only atomically while
+ * the call runs.
+ */
+enum BrdfAtlasStatus brdf_atlas_model_albedo_map_cancellable(const struct BrdfAtlasModel *model,
+                                                             size_t width,
+                                                             size_t height,
+                                                             const struct BrdfAtlasView *view,
+                                                             size_t samples,
+                                                             const int32_t *cancel,
+                                                             float *buf,
+                                                             size_t len);
 
 /**
  * The GP's predictive variance (`1 - k(x)^T K^-1 k(x)`: 0 at an input

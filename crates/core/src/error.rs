@@ -79,6 +79,9 @@ pub enum CoreError {
     /// A query outside what the model can answer.
     #[error("{0}")]
     BadQuery(String),
+    /// The caller cancelled the work ([`crate::Progress::cancelled`]).
+    #[error("cancelled by the caller")]
+    Cancelled,
 }
 
 impl CoreError {

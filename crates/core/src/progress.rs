@@ -10,6 +10,14 @@ pub trait Progress: Sync {
     fn advance(&self, _delta: u64) {}
     /// The work is finished.
     fn finish(&self) {}
+    /// Whether the caller no longer wants the result. Work that asks (the
+    /// albedo map) then stops soon and returns [`CoreError::Cancelled`]
+    /// with nothing written and nothing cached.
+    ///
+    /// [`CoreError::Cancelled`]: crate::CoreError::Cancelled
+    fn cancelled(&self) -> bool {
+        false
+    }
 }
 
 /// A [`Progress`] that shows nothing.

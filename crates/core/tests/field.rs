@@ -8,11 +8,12 @@
 //! count.
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use brdf_atlas_core::measure::reference_albedo;
 use brdf_atlas_core::{
-    AlbedoMap, AlbedoMethod, FitOptions, GplvmParams, Model, NoProgress, Precision, TransformKind,
-    View, fit_dir,
+    AlbedoMap, AlbedoMethod, CoreError, FitOptions, GplvmParams, Model, NoProgress, Precision,
+    Progress, TransformKind, View, fit_dir,
 };
 use brdf_merl::{Dims, synth};
 
@@ -270,4 +271,53 @@ fn the_plan_gives_up_only_fields_the_budget_cannot_hold() {
         }
     }
     assert!(built > 0 && skipped > 0, "built {built}, skipped {skipped}");
+}
+
+/// Cancels once `after` rows (or field refinement steps) have been asked about.
+struct CancelAfter {
+    asked: AtomicUsize,
+    after: usize,
+}
+
+impl Progress for CancelAfter {
+    fn cancelled(&self) -> bool {
+        self.asked.fetch_add(1, Ordering::Relaxed) >= self.after
+    }
+}
+
+#[test]
+fn a_cancelled_map_stops_caches_nothing_and_the_next_one_is_whole() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = fit(tmp.path(), 8, TransformKind::Log);
+    // A field view (zoomed) and the per-pixel rule: cancelled at the start,
+    // and part-way through the rows or the field's refinement.
+    let view = zoomed([0.3, 0.2], 100.0);
+    for (samples, side) in [(None, 40), (Some(16), 48)] {
+        let reference = Model::open(&path)
+            .unwrap()
+            .albedo_map(side, side, view, samples, &NoProgress)
+            .unwrap();
+        if samples.is_none() {
+            assert!(matches!(reference.method, AlbedoMethod::Field { .. }));
+        }
+        for after in [0, 1, 5] {
+            let model = Model::open(&path).unwrap();
+            let cancel = CancelAfter {
+                asked: AtomicUsize::new(0),
+                after,
+            };
+            let got = model.albedo_map(side, side, view, samples, &cancel);
+            assert!(
+                matches!(got, Err(CoreError::Cancelled)),
+                "{samples:?} after {after}: {:?}",
+                got.map(|m| m.method)
+            );
+            // Nothing half-built was kept: the next map is the whole one.
+            let next = model
+                .albedo_map(side, side, view, samples, &NoProgress)
+                .unwrap();
+            assert_eq!(next.rgb, reference.rgb, "{samples:?} after {after}");
+            assert_eq!(next.variance, reference.variance);
+        }
+    }
 }

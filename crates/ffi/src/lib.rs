@@ -67,9 +67,10 @@ pub use plausibility::{
     brdf_atlas_model_confidence, brdf_atlas_model_plausibility, brdf_atlas_model_reconstruct_with,
 };
 pub use query::{
-    BrdfAtlasLocation, brdf_atlas_model_albedo_map, brdf_atlas_model_eval,
-    brdf_atlas_model_eval_batch, brdf_atlas_model_locate, brdf_atlas_model_reconstruct,
-    brdf_atlas_model_reconstruct_to_file, brdf_atlas_model_variance_map, brdf_atlas_model_weights,
+    BrdfAtlasLocation, brdf_atlas_model_albedo_map, brdf_atlas_model_albedo_map_cancellable,
+    brdf_atlas_model_eval, brdf_atlas_model_eval_batch, brdf_atlas_model_locate,
+    brdf_atlas_model_reconstruct, brdf_atlas_model_reconstruct_to_file,
+    brdf_atlas_model_variance_map, brdf_atlas_model_weights,
 };
 pub use status::{
     BrdfAtlasStatus, brdf_atlas_last_error_message, brdf_atlas_status_message, brdf_atlas_version,

@@ -2,9 +2,10 @@
 //! evaluations, the blend weights; the albedo map; where a MERL file lands.
 
 use std::ffi::c_char;
+use std::sync::atomic::{AtomicI32, Ordering};
 
-use brdf_atlas_core::NoProgress;
 use brdf_atlas_core::View;
+use brdf_atlas_core::{NoProgress, Progress};
 use brdf_merl::{MerlFile, Vec3};
 
 use crate::check;
@@ -288,19 +289,90 @@ pub unsafe extern "C" fn brdf_atlas_model_albedo_map(
     buf: *mut f32,
     len: usize,
 ) -> BrdfAtlasStatus {
-    run("brdf_atlas_model_albedo_map", || {
-        let m = unsafe { handle::borrow(model) }?;
-        check::planar(m)?;
-        let view = unsafe { map_window(view, width, height) }?;
-        let values = check::product(&[width, height, 3], "map size")?;
-        let out = unsafe { check::buffer(buf, len, values, "buf") }?;
-        let samples = map_samples(samples)?;
-        let map = m.albedo_map(width, height, view, samples, &NoProgress)?;
-        for (o, c) in out.chunks_exact_mut(3).zip(&map.rgb) {
-            o.copy_from_slice(c);
-        }
-        Ok(())
+    run("brdf_atlas_model_albedo_map", || unsafe {
+        albedo_map(model, width, height, view, samples, &NoProgress, buf, len)
     })
+}
+
+/// `brdf_atlas_model_albedo_map` that its caller can cancel from another
+/// thread: the call reads `*cancel` now and then (atomically, relaxed
+/// order), and once it is non-zero stops within a map row or a step of the
+/// albedo field's refinement, writes nothing and returns CANCELLED. `cancel`
+/// is a `std::atomic<int32_t>` (C++) or `_Atomic int32_t` (C11) that stays
+/// alive for the call; set it to 1 and never back to 0 during the call. A
+/// viewer that moves on to another window cancels the stale map, so the
+/// cores are free for the new one at once.
+///
+/// Returns what `brdf_atlas_model_albedo_map` returns, NULL_ARGUMENT when
+/// `cancel` is NULL, and CANCELLED.
+///
+/// # Safety
+/// As `brdf_atlas_model_albedo_map`; `cancel` is NULL or points to an
+/// aligned 32-bit integer that every thread accesses only atomically while
+/// the call runs.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn brdf_atlas_model_albedo_map_cancellable(
+    model: *const BrdfAtlasModel,
+    width: usize,
+    height: usize,
+    view: *const BrdfAtlasView,
+    samples: usize,
+    cancel: *const i32,
+    buf: *mut f32,
+    len: usize,
+) -> BrdfAtlasStatus {
+    run("brdf_atlas_model_albedo_map_cancellable", || {
+        if cancel.is_null() {
+            return Err(Failure::new(
+                BrdfAtlasStatus::NullArgument,
+                "cancel is NULL",
+            ));
+        }
+        if !cancel.cast::<AtomicI32>().is_aligned() {
+            return Err(Failure::invalid("cancel is not aligned to 4 bytes"));
+        }
+        // SAFETY: non-NULL and aligned (checked above); the caller keeps it
+        // alive for the call and accesses it only atomically.
+        let flag = CancelFlag(unsafe { AtomicI32::from_ptr(cancel.cast_mut()) });
+        unsafe { albedo_map(model, width, height, view, samples, &flag, buf, len) }
+    })
+}
+
+/// A caller's cancel flag as the core's [`Progress`].
+struct CancelFlag<'a>(&'a AtomicI32);
+
+impl Progress for CancelFlag<'_> {
+    fn cancelled(&self) -> bool {
+        self.0.load(Ordering::Relaxed) != 0
+    }
+}
+
+/// The body of both albedo map entry points.
+///
+/// # Safety
+/// As `brdf_atlas_model_albedo_map`.
+#[allow(clippy::too_many_arguments)]
+unsafe fn albedo_map(
+    model: *const BrdfAtlasModel,
+    width: usize,
+    height: usize,
+    view: *const BrdfAtlasView,
+    samples: usize,
+    progress: &dyn Progress,
+    buf: *mut f32,
+    len: usize,
+) -> Result<(), Failure> {
+    let m = unsafe { handle::borrow(model) }?;
+    check::planar(m)?;
+    let view = unsafe { map_window(view, width, height) }?;
+    let values = check::product(&[width, height, 3], "map size")?;
+    let out = unsafe { check::buffer(buf, len, values, "buf") }?;
+    let samples = map_samples(samples)?;
+    let map = m.albedo_map(width, height, view, samples, progress)?;
+    for (o, c) in out.chunks_exact_mut(3).zip(&map.rgb) {
+        o.copy_from_slice(c);
+    }
+    Ok(())
 }
 
 /// The window of a map request (`view` NULL: the default one), checked with

@@ -47,10 +47,13 @@ pub enum BrdfAtlasStatus {
     Panic = 9,
     /// Another failure; the message says what.
     Other = 10,
+    /// The caller cancelled the call through its cancel flag; nothing was
+    /// written.
+    Cancelled = 11,
 }
 
 /// Every status, in number order.
-const ALL: [BrdfAtlasStatus; 11] = [
+const ALL: [BrdfAtlasStatus; 12] = [
     BrdfAtlasStatus::Ok,
     BrdfAtlasStatus::NullArgument,
     BrdfAtlasStatus::InvalidArgument,
@@ -62,6 +65,7 @@ const ALL: [BrdfAtlasStatus; 11] = [
     BrdfAtlasStatus::NotPositiveDefinite,
     BrdfAtlasStatus::Panic,
     BrdfAtlasStatus::Other,
+    BrdfAtlasStatus::Cancelled,
 ];
 
 impl BrdfAtlasStatus {
@@ -84,6 +88,7 @@ impl BrdfAtlasStatus {
             BrdfAtlasStatus::NotPositiveDefinite => c"kernel matrix not positive definite",
             BrdfAtlasStatus::Panic => c"internal error (a bug in brdf-atlas)",
             BrdfAtlasStatus::Other => c"error",
+            BrdfAtlasStatus::Cancelled => c"cancelled by the caller",
         }
     }
 }
@@ -135,6 +140,7 @@ impl From<CoreError> for Failure {
                 BrdfAtlasStatus::InvalidArgument
             }
             CoreError::NotPositiveDefinite { .. } => BrdfAtlasStatus::NotPositiveDefinite,
+            CoreError::Cancelled => BrdfAtlasStatus::Cancelled,
             _ => BrdfAtlasStatus::Other,
         };
         Failure::new(status, e.to_string())
@@ -253,7 +259,7 @@ mod tests {
             let m = unsafe { CStr::from_ptr(brdf_atlas_status_message(i as c_int)) };
             assert!(!m.to_bytes().is_empty());
         }
-        for bad in [-1, 11, c_int::MAX, c_int::MIN] {
+        for bad in [-1, ALL.len() as c_int, c_int::MAX, c_int::MIN] {
             let m = unsafe { CStr::from_ptr(brdf_atlas_status_message(bad)) };
             assert_eq!(m.to_str().unwrap(), "unknown status");
         }

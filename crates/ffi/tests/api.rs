@@ -1,10 +1,11 @@
 //! The C functions called from Rust, for what the C and C++ consumers do
 //! not reach: models that are not 2-D, a raw-transform model's exact map,
-//! misaligned buffers.
+//! misaligned buffers, a map cancelled by its caller.
 
 use std::ffi::{CStr, CString};
 use std::path::{Path, PathBuf};
 use std::ptr::{null, null_mut};
+use std::sync::atomic::{AtomicI32, Ordering};
 
 use brdf_atlas_c::*;
 use brdf_atlas_core::View;
@@ -158,4 +159,74 @@ fn the_variance_map_is_the_confidence_of_each_pixel() {
         }
     }
     assert!(v.iter().any(|&x| x > 0.5) && v.iter().any(|&x| x < 0.5));
+}
+
+#[test]
+fn a_cancellable_map_is_the_map_or_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = fit(tmp.path(), 2, TransformKind::Log);
+    let h = Handle::open(&path);
+    let (w, ht) = (24, 16);
+    let plain = |samples: usize| {
+        let mut map = vec![0.0f32; w * ht * 3];
+        let s = unsafe {
+            brdf_atlas_model_albedo_map(h.0, w, ht, null(), samples, map.as_mut_ptr(), map.len())
+        };
+        assert_eq!(s, BrdfAtlasStatus::Ok, "{}", last_error());
+        map
+    };
+    let cancellable = |samples: usize, flag: &AtomicI32, map: &mut [f32]| unsafe {
+        brdf_atlas_model_albedo_map_cancellable(
+            h.0,
+            w,
+            ht,
+            null(),
+            samples,
+            flag.as_ptr(),
+            map.as_mut_ptr(),
+            map.len(),
+        )
+    };
+    for samples in [0, 16] {
+        let want = plain(samples);
+        // Not cancelled: the plain map, bit for bit.
+        let mut map = vec![0.0f32; w * ht * 3];
+        let s = cancellable(samples, &AtomicI32::new(0), &mut map);
+        assert_eq!(s, BrdfAtlasStatus::Ok, "{}", last_error());
+        assert_eq!(map, want);
+        // Cancelled before the call: nothing written.
+        let mut map = vec![-1.0f32; w * ht * 3];
+        let s = cancellable(samples, &AtomicI32::new(1), &mut map);
+        assert_eq!(s, BrdfAtlasStatus::Cancelled);
+        assert!(last_error().contains("cancelled"), "{}", last_error());
+        assert!(map.iter().all(|v| *v == -1.0));
+        // Cancelled from another thread while it runs: the whole map or
+        // nothing, never part of one.
+        let flag = AtomicI32::new(0);
+        let mut map = vec![-1.0f32; w * ht * 3];
+        let s = std::thread::scope(|scope| {
+            scope.spawn(|| flag.store(1, Ordering::Relaxed));
+            cancellable(samples, &flag, &mut map)
+        });
+        match s {
+            BrdfAtlasStatus::Ok => assert_eq!(map, want),
+            BrdfAtlasStatus::Cancelled => assert!(map.iter().all(|v| *v == -1.0)),
+            other => panic!("{other:?}: {}", last_error()),
+        }
+    }
+    let mut map = vec![0.0f32; w * ht * 3];
+    let s = unsafe {
+        brdf_atlas_model_albedo_map_cancellable(
+            h.0,
+            w,
+            ht,
+            null(),
+            0,
+            null(),
+            map.as_mut_ptr(),
+            map.len(),
+        )
+    };
+    assert_eq!(s, BrdfAtlasStatus::NullArgument);
+    assert!(last_error().contains("cancel"), "{}", last_error());
 }

@@ -61,8 +61,9 @@ use std::any::Any;
 use std::sync::Arc;
 
 use crate::dense::product::matmul;
-use crate::error::Result;
+use crate::error::{CoreError, Result};
 use crate::model::Model;
+use crate::progress::{NoProgress, Progress};
 use crate::query::exact::RuleRows;
 use crate::query::view::View;
 use crate::simd::dot;
@@ -182,6 +183,18 @@ impl Model {
     /// exact nodes (the map then integrates every pixel instead). A domain
     /// that failed is tried again only with a larger budget.
     pub fn albedo_field(&self, view: View, budget: usize) -> Result<Option<Arc<AlbedoField>>> {
+        self.albedo_field_with(view, budget, &NoProgress)
+    }
+
+    /// [`Model::albedo_field`], stopped between refinement steps with
+    /// [`CoreError::Cancelled`] (nothing cached) once `progress` is
+    /// [cancelled](Progress::cancelled).
+    pub fn albedo_field_with(
+        &self,
+        view: View,
+        budget: usize,
+        progress: &dyn Progress,
+    ) -> Result<Option<Arc<AlbedoField>>> {
         view.check()?;
         let domain = domain_of(view);
         let cache = &self.map_basis().fields;
@@ -196,8 +209,8 @@ impl Model {
         // Plan with the per-pixel rule's rows first: a field that would
         // need far more nodes than the budget is given up before any
         // exact node is paid for.
-        let field = match self.plan_field(domain, budget)? {
-            Some(_) => self.build_field(domain, budget)?.map(Arc::new),
+        let field = match self.plan(domain, budget, progress)? {
+            Some(_) => self.build(domain, budget, progress)?.map(Arc::new),
             None => None,
         };
         let mut cache = lock(cache);
@@ -239,8 +252,12 @@ impl Model {
     /// is then judged not to fit in its budget either (the plan's values
     /// come from another rule, so this is a judgement, not a bound).
     pub fn plan_field(&self, domain: View, budget: usize) -> Result<Option<usize>> {
+        self.plan(domain, budget, &NoProgress)
+    }
+
+    fn plan(&self, domain: View, budget: usize, progress: &dyn Progress) -> Result<Option<usize>> {
         let cap = PLAN_FACTOR.saturating_mul(budget);
-        let plan = self.albedo_patches(domain, cap, self.plan_rows())?;
+        let plan = self.albedo_patches(domain, cap, self.plan_rows(), progress)?;
         Ok(plan.map(|(_, nodes)| nodes))
     }
 
@@ -251,9 +268,13 @@ impl Model {
         domain: View,
         budget: usize,
         rows: &RuleRows,
+        progress: &dyn Progress,
     ) -> Result<Option<(Vec<Patch>, usize)>> {
         let mut nodes = 0;
         let patches = refine(domain, 3, &LEVELS, ALBEDO_TOLERANCE, 0, &mut |pts| {
+            if progress.cancelled() {
+                return Err(CoreError::Cancelled);
+            }
             nodes += pts.len();
             if nodes > budget {
                 return Ok(None);
@@ -271,7 +292,17 @@ impl Model {
     /// Build the field of `domain` (no cache), or `None` if its albedo would
     /// need more than `budget` exact nodes.
     pub fn build_field(&self, domain: View, budget: usize) -> Result<Option<AlbedoField>> {
-        let Some((albedo, nodes)) = self.albedo_patches(domain, budget, self.rule_rows())? else {
+        self.build(domain, budget, &NoProgress)
+    }
+
+    fn build(
+        &self,
+        domain: View,
+        budget: usize,
+        progress: &dyn Progress,
+    ) -> Result<Option<AlbedoField>> {
+        let rows = self.rule_rows();
+        let Some((albedo, nodes)) = self.albedo_patches(domain, budget, rows, progress)? else {
             return Ok(None);
         };
         let variance = refine(

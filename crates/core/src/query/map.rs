@@ -176,7 +176,10 @@ impl Model {
     /// The albedo map of a `width x height` image of `view`. `samples`:
     /// `None` uses the linear shortcut for a linear transform and the albedo
     /// field ([`Model::albedo_field`]) for any other, `Some(s)` integrates
-    /// each pixel with an `s`-point rule.
+    /// each pixel with an `s`-point rule. Once `progress` is
+    /// [cancelled](Progress::cancelled) (it must then stay so) the map stops
+    /// within a row or a field refinement step and returns
+    /// [`CoreError::Cancelled`].
     pub fn albedo_map(
         &self,
         width: usize,
@@ -197,7 +200,8 @@ impl Model {
         let linear = self.file().transform.is_linear();
         let field = match samples {
             None if !linear => {
-                self.albedo_field(view, self.field_budget(width * height, DEFAULT_SAMPLES))?
+                let budget = self.field_budget(width * height, DEFAULT_SAMPLES);
+                self.albedo_field_with(view, budget, progress)?
             }
             _ => None,
         };
@@ -214,6 +218,9 @@ impl Model {
                     .zip(variance.par_chunks_mut(width))
                     .enumerate()
                     .for_each(|(py, (row, var))| {
+                        if progress.cancelled() {
+                            return;
+                        }
                         let y = view.pixel_to_latent(0.0, py as f64, width, height)[1];
                         eval_row(field.albedo_patches(), &xs, y, 3, |px, v| {
                             row[px] = [0, 1, 2].map(|c| v[c].max(0.0) as f32);
@@ -237,6 +244,9 @@ impl Model {
                     .zip(variance.par_chunks_mut(width))
                     .enumerate()
                     .for_each(|(py, (row, var))| {
+                        if progress.cancelled() {
+                            return;
+                        }
                         variances(&inv, &kernel_row(py), n, var);
                         let ey = &ey[py * n..(py + 1) * n];
                         let v: Vec<Vec<f64>> = cols
@@ -280,6 +290,9 @@ impl Model {
                     .zip(variance.par_chunks_mut(width))
                     .enumerate()
                     .for_each(|(py, (out, var))| {
+                        if progress.cancelled() {
+                            return;
+                        }
                         let kx = kernel_row(py);
                         let mut vbuf = vec![0.0f64; r * width];
                         matmul(&mut vbuf, &c, &kx, n);
@@ -311,6 +324,10 @@ impl Model {
             }
         };
         progress.finish();
+        // Rows skipped once cancelled hold zeros: no map at all, then.
+        if progress.cancelled() {
+            return Err(CoreError::Cancelled);
+        }
         self.verify()?;
         Ok(AlbedoMap {
             width,
