@@ -274,6 +274,9 @@ pub(crate) struct MapBasis {
     /// The last albedo fields built (`crate::query::field`'s `AlbedoField`),
     /// oldest first.
     pub(crate) fields: Mutex<Vec<Arc<dyn Any + Send + Sync>>>,
+    /// The map's last per-pixel rules (`crate::query::map`'s `PixelRule`),
+    /// one a sample count, oldest first.
+    pub(crate) pixel_rules: Mutex<Vec<Arc<dyn Any + Send + Sync>>>,
 }
 
 #[cfg(test)]

@@ -19,6 +19,9 @@
 //!   pixels is one matrix product `C k(X_row)`. The sample count trades
 //!   accuracy for time (docs/performance.md has the figures).
 
+use std::any::Any;
+use std::sync::Arc;
+
 use brdf_merl::Quadrature;
 use faer::Mat;
 use rayon::prelude::*;
@@ -29,7 +32,8 @@ use crate::dense::product::matmul;
 use crate::error::{CoreError, Result};
 use crate::model::Model;
 use crate::progress::Progress;
-use crate::query::field::{eval_row, variances};
+use crate::query::exact::RuleRows;
+use crate::query::field::{eval_row, lock, variances};
 pub use crate::query::view::View;
 use crate::simd::dot;
 use crate::simd::fastexp;
@@ -263,28 +267,15 @@ impl Model {
                 AlbedoMethod::Linear
             }
             (None, Some(s)) => {
-                let rule =
-                    Quadrature::with_samples_shaped(self.albedo_rule(), s.max(1), self.shape());
-                let store = self.store();
-                // The rows the rule reads (measured ones only), grouped by channel,
-                // with the quadrature weight folded into the inverse's scale.
-                let rows = self.rows_of(&rule);
+                let rule = self.pixel_rule(s.max(1));
+                let PixelRule {
+                    rows,
+                    ends,
+                    c,
+                    mean,
+                    ..
+                } = &*rule;
                 let r = rows.rows.len();
-                let ends: Vec<usize> = (0..3)
-                    .map(|c| rows.channel.iter().filter(|&&x| x as usize <= c).count())
-                    .collect();
-                let zq = Mat::from_fn(n, r, |i, j| match store.z() {
-                    Rows::F32(z) => z[rows.rows[j] * n + i] as f64,
-                    Rows::F64(z) => z[rows.rows[j] * n + i],
-                });
-                // C^T = K^-1 Z_q^T, so that the values at x are mean + C k(x);
-                // C column-major (r x n) for the product.
-                let ct = self.llt_solve(&zq);
-                let c: Vec<f64> = (0..n)
-                    .flat_map(|i| (0..r).map(move |j| (i, j)))
-                    .map(|(i, j)| ct[(i, j)])
-                    .collect();
-                let mean: Vec<f64> = rows.rows.iter().map(|&row| store.mean()[row]).collect();
                 let (weight, exponential) = (&rows.weight, rows.exponential);
                 rgb.par_chunks_mut(width)
                     .zip(variance.par_chunks_mut(width))
@@ -295,12 +286,12 @@ impl Model {
                         }
                         let kx = kernel_row(py);
                         let mut vbuf = vec![0.0f64; r * width];
-                        matmul(&mut vbuf, &c, &kx, n);
+                        matmul(&mut vbuf, c, &kx, n);
                         let mut terms = vec![0.0f64; r];
                         for (px, o) in out.iter_mut().enumerate() {
                             let col = &vbuf[px * r..(px + 1) * r];
                             // Element-wise first (vectorises), then a fixed-order sum.
-                            let it = terms.iter_mut().zip(&mean).zip(weight).zip(col);
+                            let it = terms.iter_mut().zip(mean).zip(weight).zip(col);
                             if exponential {
                                 it.for_each(|(((o, m), w), t)| {
                                     *o = w * (fastexp::exp(m + t) - 1.0).max(0.0)
@@ -319,7 +310,7 @@ impl Model {
                     });
                 AlbedoMethod::Quadrature {
                     samples: s,
-                    bins: rule.len(),
+                    bins: rule.bins,
                 }
             }
         };
@@ -337,6 +328,78 @@ impl Model {
             variance,
             method,
         })
+    }
+}
+
+/// The map's per-pixel rule at one sample count, ready for pixels: the
+/// store rows the rule reads, where each channel's rows end, their means,
+/// and `C = K^-1 Z_q^T` (column-major `r x n`), so that the values at a
+/// point `x` are `mean + C k(x)`.
+pub(crate) struct PixelRule {
+    samples: usize,
+    /// Bins the rule reads.
+    bins: usize,
+    rows: RuleRows,
+    ends: Vec<usize>,
+    c: Vec<f64>,
+    mean: Vec<f64>,
+}
+
+/// Per-pixel rules a model keeps, one a sample count: a viewer asking for
+/// previews and full maps again and again pays for each rule once.
+const PIXEL_RULE_CACHE: usize = 4;
+
+impl Model {
+    /// The per-pixel rule with `samples` samples, from the model's cache or
+    /// built (the shaped quadrature rule, its store rows and `C`) and kept.
+    fn pixel_rule(&self, samples: usize) -> Arc<PixelRule> {
+        let cache = &self.map_basis().pixel_rules;
+        let find = |c: &[Arc<dyn Any + Send + Sync>]| {
+            c.iter()
+                .filter_map(|r| r.clone().downcast::<PixelRule>().ok())
+                .find(|r| r.samples == samples)
+        };
+        if let Some(r) = find(&lock(cache)) {
+            return r;
+        }
+        let n = self.latent().nrows();
+        let store = self.store();
+        let quadrature = Quadrature::with_samples_shaped(self.albedo_rule(), samples, self.shape());
+        // The rows the rule reads (measured ones only), grouped by channel,
+        // with the quadrature weight folded into the inverse's scale.
+        let rows = self.rows_of(&quadrature);
+        let r = rows.rows.len();
+        let ends: Vec<usize> = (0..3)
+            .map(|c| rows.channel.iter().filter(|&&x| x as usize <= c).count())
+            .collect();
+        let zq = Mat::from_fn(n, r, |i, j| match store.z() {
+            Rows::F32(z) => z[rows.rows[j] * n + i] as f64,
+            Rows::F64(z) => z[rows.rows[j] * n + i],
+        });
+        // C^T = K^-1 Z_q^T, so that the values at x are mean + C k(x);
+        // C column-major (r x n) for the product.
+        let ct = self.llt_solve(&zq);
+        let c: Vec<f64> = (0..n)
+            .flat_map(|i| (0..r).map(move |j| (i, j)))
+            .map(|(i, j)| ct[(i, j)])
+            .collect();
+        let mean: Vec<f64> = rows.rows.iter().map(|&row| store.mean()[row]).collect();
+        let rule = Arc::new(PixelRule {
+            samples,
+            bins: quadrature.len(),
+            rows,
+            ends,
+            c,
+            mean,
+        });
+        let mut cache = lock(cache);
+        if find(&cache).is_none() {
+            if cache.len() >= PIXEL_RULE_CACHE {
+                cache.remove(0);
+            }
+            cache.push(rule.clone());
+        }
+        rule
     }
 }
 
