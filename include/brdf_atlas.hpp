@@ -14,6 +14,7 @@
 #define BRDF_ATLAS_HPP
 
 #include <array>
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
@@ -206,6 +207,28 @@ public:
     /// The albedo map of the default window.
     std::vector<float> albedo_map(std::size_t width, std::size_t height) const {
         return map(width, height, nullptr, 0);
+    }
+
+    /// albedo_map() that another thread can cancel by setting `cancel` to 1
+    /// (and never back during the call): then it stops soon and throws
+    /// Error with status BRDF_ATLAS_STATUS_CANCELLED.
+    std::vector<float> albedo_map(std::size_t width, std::size_t height, const View &view,
+                                  std::size_t samples,
+                                  const std::atomic<std::int32_t> &cancel) const {
+        static_assert(sizeof(std::atomic<std::int32_t>) == sizeof(std::int32_t) &&
+                          std::atomic<std::int32_t>::is_always_lock_free,
+                      "the library reads the flag as a lock-free 32-bit atomic");
+        // The library reads it atomically; it never writes it.
+        const auto *flag = reinterpret_cast<const std::int32_t *>(&cancel);
+        if (width == 0 || height == 0 || width > BRDF_ATLAS_MAX_MAP_SIDE ||
+            height > BRDF_ATLAS_MAX_MAP_SIDE) {
+            check(brdf_atlas_model_albedo_map_cancellable(handle_, width, height, &view, samples,
+                                                          flag, nullptr, 0));
+        }
+        std::vector<float> rgb(width * height * 3);
+        check(brdf_atlas_model_albedo_map_cancellable(handle_, width, height, &view, samples, flag,
+                                                      rgb.data(), rgb.size()));
+        return rgb;
     }
 
     /// The GP's predictive variance of every pixel of the map of `view`

@@ -1,5 +1,7 @@
 // Qt Test of the brdf-atlas map widget, driven like a user: hover a
-// reference point, zoom with the wheel, drag, click, press Validate, wait
+// reference point, zoom with the wheel, drag (a preview of every window on
+// the way, the library's map pixel for pixel, then the full map; the
+// frames' delays are printed), click, press Validate, wait
 // for the reconstruction off the GUI thread, and check the table against
 // the C library called directly (bit for bit), then save it and compare
 // with the library's own writer byte for byte. Under Validate the panel
@@ -237,6 +239,91 @@ private slots:
         QVERIFY(!view_->hasMarker());
         QCOMPARE(marker.count(), 0);
         waitForMap();
+    }
+
+    // Every zoom and pan is followed at once by a preview of the new window
+    // (the library's map at a sixth of the side, with few samples), then by
+    // the full map once the motion stops; both are the library's own maps
+    // of that window, pixel for pixel. Prints how long after the gesture
+    // each frame was drawn.
+    void previewFollowsTheMotionThenTheFullMap() {
+        struct Frame {
+            int level;
+            double ms;
+            QImage image;
+            BrdfAtlasView window;
+        };
+        QVector<Frame> frames;
+        const QMetaObject::Connection c =
+            connect(view_, &AtlasMapView::frameShown, [&](int level, double ms) {
+                frames << Frame{level, ms, view_->mapImage(), view_->mapWindow()};
+            });
+        const brdf_atlas::Model m(modelPath_.toStdString());
+        auto sameAsLibrary = [&](const Frame &f, std::size_t samples) {
+            const brdf_atlas::View v{f.window.x0, f.window.x1, f.window.y0, f.window.y1};
+            const int w = f.image.width(), h = f.image.height();
+            const std::vector<float> rgb = m.albedo_map(w, h, v, samples);
+            const std::vector<float> variance = m.variance_map(w, h, v);
+            for (int y = 0; y < h; ++y)
+                for (int x = 0; x < w; ++x) {
+                    const std::size_t p = std::size_t(y) * w + x;
+                    if (f.image.pixel(x, y) != atlasPixel(&rgb[3 * p], variance[p])) return false;
+                }
+            return true;
+        };
+        const QSize full(view_->mapImage().size());
+        const QSize preview((full.width() + AtlasMapView::kPreviewDivisor - 1) / AtlasMapView::kPreviewDivisor,
+                            (full.height() + AtlasMapView::kPreviewDivisor - 1) / AtlasMapView::kPreviewDivisor);
+        auto check = [&](const char *gesture) {
+            waitForMap();
+            QVERIFY2(frames.size() >= 2, gesture);
+            const Frame &first = frames.first(), &last = frames.last();
+            QCOMPARE(first.level, AtlasMapView::kPreview);
+            QCOMPARE(first.image.size(), preview);
+            QVERIFY2(sameAsLibrary(first, AtlasMapView::kPreviewSamples), gesture);
+            QCOMPARE(last.level, AtlasMapView::kFull);
+            QCOMPARE(last.image.size(), full);
+            QVERIFY2(sameAsLibrary(last, 0), gesture);
+            const BrdfAtlasView w = view_->window();
+            QVERIFY(last.window.x0 == w.x0 && last.window.y1 == w.y1);
+            QCOMPARE(view_->frameLatencyMs(AtlasMapView::kFull), last.ms);
+            qInfo("%s: %dx%d preview drawn %.1f ms after the last move, %dx%d map %.1f ms after",
+                  gesture, first.image.width(), first.image.height(), first.ms, last.image.width(),
+                  last.image.height(), last.ms);
+        };
+        // A wheel notch out, about the centre.
+        const QPointF at(view_->width() / 2.0, view_->height() / 2.0);
+        QWheelEvent wheel(at, view_->mapToGlobal(at.toPoint()), QPoint(), QPoint(0, -120), Qt::NoButton,
+                          Qt::NoModifier, Qt::NoScrollPhase, false);
+        QApplication::sendEvent(view_, &wheel);
+        check("zoom");
+        // A drag of twelve moves, the events handled between them as a user's
+        // would be: previews follow the motion, a full map only at the end.
+        frames.clear();
+        const QPoint a(view_->width() / 2, view_->height() / 2);
+        QTest::mousePress(view_, Qt::LeftButton, Qt::NoModifier, a);
+        for (int k = 1; k <= 12; ++k) {
+            const QPointF p = a + QPointF(3.0 * k, -2.0 * k);
+            QMouseEvent move(QEvent::MouseMove, p, view_->mapToGlobal(p.toPoint()), Qt::NoButton,
+                             Qt::LeftButton, Qt::NoModifier);
+            QApplication::sendEvent(view_, &move);
+            QTest::qWait(15);
+        }
+        QTest::mouseRelease(view_, Qt::LeftButton, Qt::NoModifier, a + QPoint(36, -24));
+        check("pan");
+        for (int k = 0; k + 1 < frames.size(); ++k) QCOMPARE(frames[k].level, AtlasMapView::kPreview);
+        // Back where it was.
+        frames.clear();
+        QTest::mousePress(view_, Qt::LeftButton, Qt::NoModifier, a + QPoint(36, -24));
+        QMouseEvent back(QEvent::MouseMove, QPointF(a), view_->mapToGlobal(a), Qt::NoButton, Qt::LeftButton,
+                         Qt::NoModifier);
+        QApplication::sendEvent(view_, &back);
+        QTest::mouseRelease(view_, Qt::LeftButton, Qt::NoModifier, a);
+        QWheelEvent in(at, view_->mapToGlobal(at.toPoint()), QPoint(), QPoint(0, 120), Qt::NoButton,
+                       Qt::NoModifier, Qt::NoScrollPhase, false);
+        QApplication::sendEvent(view_, &in);
+        waitForMap();
+        disconnect(c);
     }
 
     void clickSetsTheMarker() {

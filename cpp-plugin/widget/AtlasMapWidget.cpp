@@ -65,20 +65,27 @@ QRgb atlasPixel(const float *rgb, float variance) {
 // AtlasMapView
 
 AtlasMapView::AtlasMapView(QWidget *parent)
-    : QWidget(parent), mapWatcher_(new QFutureWatcher<MapResult>(this)) {
+    : QWidget(parent),
+      previewWatcher_(new QFutureWatcher<MapResult>(this)),
+      fullWatcher_(new QFutureWatcher<MapResult>(this)) {
     setMouseTracking(true);
     setSizePolicy(QSizePolicy::Expanding, QSizePolicy::Expanding);
     setCursor(Qt::CrossCursor);
     debounce_.setSingleShot(true);
     debounce_.setInterval(120);
-    connect(&debounce_, &QTimer::timeout, this, &AtlasMapView::startMap);
-    connect(mapWatcher_, &QFutureWatcher<MapResult>::finished, this, &AtlasMapView::mapFinished);
+    connect(&debounce_, &QTimer::timeout, this, &AtlasMapView::startFull);
+    connect(previewWatcher_, &QFutureWatcher<MapResult>::finished, this,
+            &AtlasMapView::previewFinished);
+    connect(fullWatcher_, &QFutureWatcher<MapResult>::finished, this, &AtlasMapView::fullFinished);
+    moved_.start();
 }
 
 AtlasMapView::~AtlasMapView() {
-    // The job holds its own reference to the model; wait so it does not
-    // outlive the watcher it reports to.
-    mapWatcher_->waitForFinished();
+    // The jobs hold their own reference to the model; wait so they do not
+    // outlive the watchers they report to (the full map stops early).
+    if (fullCancel_) fullCancel_->store(1);
+    previewWatcher_->waitForFinished();
+    fullWatcher_->waitForFinished();
 }
 
 void AtlasMapView::setModel(std::shared_ptr<const brdf_atlas::Model> model) {
@@ -91,6 +98,9 @@ void AtlasMapView::setModel(std::shared_ptr<const brdf_atlas::Model> model) {
     contours_.clear();
     mapError_.clear();
     userMoved_ = false;
+    // Maps of the previous model still on their way are never shown.
+    shownGeneration_ = generation_;
+    shownLevel_ = kFull + 1;
     if (model_) {
         try {
             const std::size_t n = model_->material_count();
@@ -105,8 +115,7 @@ void AtlasMapView::setModel(std::shared_ptr<const brdf_atlas::Model> model) {
         }
     }
     fitDefaultWindow();
-    ++generation_;
-    startMap();
+    scheduleMap();
     update();
 }
 
@@ -181,34 +190,65 @@ int AtlasMapView::materialAt(const QPointF &widgetPos) const {
 }
 
 bool AtlasMapView::mapPending() const {
-    return model_ && (mapWatcher_->isRunning() || debounce_.isActive() ||
-                      (mapImage_.isNull() && mapError_.isEmpty()));
+    return model_ && (previewWatcher_->isRunning() || fullWatcher_->isRunning() ||
+                      debounce_.isActive() || shownGeneration_ != generation_ ||
+                      shownLevel_ != kFull);
 }
 
 void AtlasMapView::scheduleMap() {
     ++generation_;
+    moved_.restart();
+    // The full map of a window left behind is not worth finishing.
+    if (fullCancel_ && fullGeneration_ != generation_) fullCancel_->store(1);
+    startPreview();
     debounce_.start();
 }
 
-void AtlasMapView::startMap() {
-    if (!model_ || mapWatcher_->isRunning()) {
-        return;  // mapFinished starts the next one
-    }
+AtlasMapView::MapRequest AtlasMapView::request(int level) const {
     const double f = std::min(1.0, double(kMaxMapSide) / std::max(width(), height()));
-    const int mw = std::max(1, int(std::lround(width() * f)));
-    const int mh = std::max(1, int(std::lround(height() * f)));
-    mapWatcher_->setFuture(
-        QtConcurrent::run(&AtlasMapView::computeMap, model_, window(), mw, mh, generation_));
+    const int divisor = level == kFull ? 1 : kPreviewDivisor;
+    MapRequest r;
+    r.window = window();
+    r.width = std::max(1, int(std::ceil(width() * f / divisor)));
+    r.height = std::max(1, int(std::ceil(height() * f / divisor)));
+    r.generation = generation_;
+    r.level = level;
+    return r;
+}
+
+void AtlasMapView::startPreview() {
+    if (!model_ || previewWatcher_->isRunning()) {
+        return;  // previewFinished starts the next one
+    }
+    previewWatcher_->setFuture(
+        QtConcurrent::run(&AtlasMapView::computeMap, model_, request(kPreview), Cancel()));
+}
+
+void AtlasMapView::startFull() {
+    if (!model_) return;
+    if (fullWatcher_->isRunning()) {
+        if (fullGeneration_ != generation_) fullCancel_->store(1);
+        return;  // fullFinished starts the next one
+    }
+    fullCancel_ = std::make_shared<std::atomic<std::int32_t>>(0);
+    fullGeneration_ = generation_;
+    fullWatcher_->setFuture(
+        QtConcurrent::run(&AtlasMapView::computeMap, model_, request(kFull), fullCancel_));
 }
 
 AtlasMapView::MapResult AtlasMapView::computeMap(std::shared_ptr<const brdf_atlas::Model> model,
-                                                 BrdfAtlasView win, int width, int height,
-                                                 quint64 generation) {
+                                                 MapRequest req, Cancel cancel) {
     MapResult out;
-    out.window = win;
-    out.generation = generation;
+    out.window = req.window;
+    out.generation = req.generation;
+    out.level = req.level;
+    const int width = req.width, height = req.height;
+    const BrdfAtlasView win = req.window;
     try {
-        const std::vector<float> rgb = model->albedo_map(width, height, win);
+        const std::vector<float> rgb =
+            req.level == kPreview
+                ? model->albedo_map(width, height, win, kPreviewSamples)
+                : model->albedo_map(width, height, win, 0, *cancel);
         const std::vector<float> variance = model->variance_map(width, height, win);
         QImage image(width, height, QImage::Format_RGB32);
         for (int y = 0; y < height; ++y) {
@@ -238,16 +278,22 @@ AtlasMapView::MapResult AtlasMapView::computeMap(std::shared_ptr<const brdf_atla
             out.contours << QLineF(win.x0 + s.x0 * sx, win.y1 - s.y0 * sy, win.x0 + s.x1 * sx,
                                    win.y1 - s.y1 * sy);
         }
+    } catch (const brdf_atlas::Error &e) {
+        out.cancelled = e.status() == BRDF_ATLAS_STATUS_CANCELLED;
+        out.error = errorText(e);
     } catch (const std::exception &e) {
         out.error = errorText(e);
     }
     return out;
 }
 
-void AtlasMapView::mapFinished() {
-    MapResult r = mapWatcher_->result();
-    // A result is kept even if the window moved meanwhile: it is drawn where
-    // it belongs until the next one arrives.
+bool AtlasMapView::show(const MapResult &r) {
+    // A result is drawn where it belongs even if the window moved
+    // meanwhile, unless what is shown is newer: a later window, or the full
+    // map of the same one.
+    const bool newer = r.generation > shownGeneration_ ||
+                       (r.generation == shownGeneration_ && r.level >= shownLevel_);
+    if (r.cancelled || !newer) return false;
     if (r.error.isEmpty()) {
         mapImage_ = r.image;
         mapWindow_ = r.window;
@@ -256,12 +302,32 @@ void AtlasMapView::mapFinished() {
     } else {
         mapError_ = r.error;
     }
+    shownGeneration_ = r.generation;
+    shownLevel_ = r.level;
     update();
+    if (r.generation == generation_) {
+        const double ms = moved_.nsecsElapsed() / 1e6;
+        latencyMs_[r.level == kFull ? 1 : 0] = ms;
+        emit frameShown(r.level, ms);
+    }
+    return true;
+}
+
+void AtlasMapView::previewFinished() {
+    const MapResult r = previewWatcher_->result();
+    show(r);
+    if (r.generation != generation_) startPreview();
+}
+
+void AtlasMapView::fullFinished() {
+    const MapResult r = fullWatcher_->result();
+    fullCancel_.reset();
+    const bool shown = show(r);
     if (r.generation != generation_) {
-        if (!debounce_.isActive()) startMap();
+        if (!debounce_.isActive()) startFull();
         return;
     }
-    emit mapReady(mapError_);
+    if (shown) emit mapReady(mapError_);
 }
 
 void AtlasMapView::paintEvent(QPaintEvent *) {

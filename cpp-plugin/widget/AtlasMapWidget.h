@@ -1,7 +1,9 @@
 // AtlasMapWidget.h: the brdf-atlas map for Qt 5 Widgets.
 //
 // AtlasMapView draws the albedo map of a brdf-atlas model (computed by the
-// C library for exactly the window shown, off the GUI thread), its
+// C library for exactly the window shown, off the GUI thread: a small
+// preview that follows every zoom and pan as it happens, then the full map
+// once the motion stops, the stale one cancelled), its
 // luminance contour lines, the model's materials as reference points (name
 // on hover) and a marker where the user clicked; the wheel zooms about the
 // cursor, dragging pans. AtlasPanel puts the view beside the latent
@@ -28,6 +30,7 @@
 #include <QVector>
 #include <QWidget>
 
+#include <atomic>
 #include <memory>
 #include <vector>
 
@@ -105,9 +108,11 @@ public:
     /// Index of the material nearest to a latent point (-1 without a model).
     int nearestMaterial(const QPointF &latent) const;
 
-    /// The last map computed: image, its window, contour segments (latent
-    /// coordinates); mapPending() while a newer one is on its way.
+    /// The last map shown: image, its window, contour segments (latent
+    /// coordinates), its level (kPreview or kFull); mapPending() until the
+    /// full map of the window in view is shown.
     const QImage &mapImage() const { return mapImage_; }
+    int mapLevel() const { return shownLevel_; }
     BrdfAtlasView mapWindow() const { return mapWindow_; }
     const QVector<QLineF> &contours() const { return contours_; }
     bool mapPending() const;
@@ -117,6 +122,16 @@ public:
     static_assert(kMaxMapSide <= BRDF_ATLAS_MAX_MAP_SIDE, "a map side the library accepts");
     /// Contour levels drawn.
     static constexpr int kContourLevels = 12;
+    /// Map levels: the preview drawn while the window moves (a side
+    /// kPreviewDivisor times smaller, kPreviewSamples quadrature samples a
+    /// pixel), and the full map (the library's default rule) once it stops.
+    static constexpr int kPreview = 0;
+    static constexpr int kFull = 1;
+    static constexpr int kPreviewDivisor = 6;
+    static constexpr int kPreviewSamples = 16;
+    /// Milliseconds from the last change of the window to the frame of
+    /// `level` for it being shown (-1 before the first).
+    double frameLatencyMs(int level) const { return latencyMs_[level == kFull ? 1 : 0]; }
 
     QSize sizeHint() const override { return QSize(280, 280); }
     QSize minimumSizeHint() const override { return QSize(160, 160); }
@@ -124,8 +139,11 @@ public:
 signals:
     /// The user clicked at latent point (x, y).
     void markerChanged(double x, double y);
-    /// A map for the current window is drawn (or failed: message non-empty).
+    /// The full map for the current window is drawn (or failed: message non-empty).
     void mapReady(const QString &error);
+    /// A frame of `level` (kPreview or kFull) for the current window is
+    /// drawn, `latencyMs` after the window last changed.
+    void frameShown(int level, double latencyMs);
 
 protected:
     void paintEvent(QPaintEvent *) override;
@@ -137,19 +155,31 @@ protected:
     void leaveEvent(QEvent *) override;
 
 private:
+    using Cancel = std::shared_ptr<std::atomic<std::int32_t>>;
     struct MapResult {
         QImage image;
         BrdfAtlasView window{};
         QVector<QLineF> contours;
         QString error;
         quint64 generation = 0;
+        int level = kFull;
+        bool cancelled = false;
     };
-    static MapResult computeMap(std::shared_ptr<const brdf_atlas::Model> model,
-                                BrdfAtlasView window, int width, int height,
-                                quint64 generation);
+    struct MapRequest {
+        BrdfAtlasView window{};
+        int width = 1, height = 1;
+        quint64 generation = 0;
+        int level = kFull;
+    };
+    static MapResult computeMap(std::shared_ptr<const brdf_atlas::Model> model, MapRequest request,
+                                Cancel cancel);
+    MapRequest request(int level) const;
     void scheduleMap();
-    void startMap();
-    void mapFinished();
+    void startPreview();
+    void startFull();
+    void previewFinished();
+    void fullFinished();
+    bool show(const MapResult &r);
     void fitDefaultWindow();
     int materialAt(const QPointF &widgetPos) const;
 
@@ -176,8 +206,15 @@ private:
     QVector<QLineF> contours_;
     QString mapError_;
     quint64 generation_ = 0;  // of the window wanted now
-    QTimer debounce_;
-    QFutureWatcher<MapResult> *mapWatcher_;
+    quint64 shownGeneration_ = 0;  // of the map shown, and its level
+    int shownLevel_ = kPreview;
+    QElapsedTimer moved_;  // since the window last changed
+    double latencyMs_[2] = {-1, -1};
+    QTimer debounce_;  // the full map starts once the window stops moving
+    QFutureWatcher<MapResult> *previewWatcher_;
+    QFutureWatcher<MapResult> *fullWatcher_;
+    Cancel fullCancel_;  // of the full map being computed
+    quint64 fullGeneration_ = 0;
 };
 
 /// The map with coordinates, Validate and Save.
