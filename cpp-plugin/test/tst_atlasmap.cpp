@@ -242,7 +242,7 @@ private slots:
     }
 
     // Every zoom and pan is followed at once by a preview of the new window
-    // (the library's map at a sixth of the side, with few samples), then by
+    // (the library's map at a sixth of the side, with 64 samples), then by
     // the full map once the motion stops; both are the library's own maps
     // of that window, pixel for pixel. Prints how long after the gesture
     // each frame was drawn.

@@ -128,7 +128,7 @@ public:
     static constexpr int kPreview = 0;
     static constexpr int kFull = 1;
     static constexpr int kPreviewDivisor = 6;
-    static constexpr int kPreviewSamples = 16;
+    static constexpr int kPreviewSamples = 64;
     /// Milliseconds from the last change of the window to the frame of
     /// `level` for it being shown (-1 before the first).
     double frameLatencyMs(int level) const { return latencyMs_[level == kFull ? 1 : 0]; }

@@ -1,5 +1,6 @@
 //! What each way of drawing a log-transform map buys: the albedo error of
-//! the per-pixel quadrature (at several sample counts) and of the default
+//! the per-pixel quadrature (at several sample counts; the map panel's
+//! preview uses 64) and of the default
 //! (the albedo field where it applies, [`brdf_atlas_core::field`]),
 //! against the dense rule applied to the full reconstruction, at random
 //! pixels of a 1024 x 1024 map of the default view and of a view a hundred
@@ -82,7 +83,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .iter()
             .map(|x| reference_albedo(&model, x, model.albedo_rule()))
             .collect::<Result<Vec<_>, _>>()?;
-        for samples in [Some(64), Some(256), Some(1024), Some(4096), None] {
+        for samples in [Some(16), Some(64), Some(256), Some(1024), Some(4096), None] {
             // A fresh model for each, so that "first" includes what a map builds.
             let fresh = Model::open(&path)?;
             // Full 1024 x 1024 maps for the default and the default sample count only.
