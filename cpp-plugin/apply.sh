@@ -115,4 +115,4 @@ if [ ! -s "$build/src/data/sphere.obj" ]; then
     python3 "$here/make-sphere-obj.py" "$build/src/data/sphere.obj"
     echo "apply.sh: wrote $build/src/data/sphere.obj (upstream has none)"
 fi
-echo "apply.sh: now cd $build && qmake prefix=PREFIX && make -j2 && make install"
+echo "apply.sh: now cd $build && qmake prefix=PREFIX main.pro && make -j2 && make install"
