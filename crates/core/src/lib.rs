@@ -42,7 +42,7 @@ mod progress;
 mod query;
 mod simd;
 
-pub use data::{Dataset, Precision, Rows, Store, TransformKind, build_store};
+pub use data::{Dataset, Precision, Rows, Store, StoreIdentity, TransformKind, build_store};
 pub use error::{CoreError, ParamError, Result};
 pub use eval::{loo, measure};
 pub use gplvm::optim;

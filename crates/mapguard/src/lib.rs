@@ -55,13 +55,18 @@ pub enum Watch {
     Path,
 }
 
-/// What a file's metadata says about its content.
+/// What a file's metadata says about its content: the file (device and
+/// inode), its size and its modification time (seconds, nanoseconds).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-struct Stamp {
-    dev: u64,
-    ino: u64,
-    size: u64,
-    mtime: (i64, i64),
+pub struct Stamp {
+    /// Device of the file system.
+    pub dev: u64,
+    /// Inode number.
+    pub ino: u64,
+    /// Size in bytes.
+    pub size: u64,
+    /// Last modification: seconds and nanoseconds since the epoch.
+    pub mtime: (i64, i64),
 }
 
 impl Stamp {
@@ -132,6 +137,11 @@ impl GuardedMap {
     /// The mapped bytes.
     pub fn bytes(&self) -> &[u8] {
         &self.map
+    }
+
+    /// The file's stamp when it was mapped.
+    pub fn stamp(&self) -> Stamp {
+        self.seen
     }
 
     /// Has the file been truncated under the map (its pages then read as

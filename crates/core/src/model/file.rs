@@ -13,7 +13,7 @@ use brdf_merl::Dims;
 use faer::MatRef;
 use serde::{Deserialize, Serialize};
 
-use crate::data::{Precision, Store, TransformKind};
+use crate::data::{Precision, Store, StoreIdentity, TransformKind};
 use crate::error::{CoreError, Result};
 use crate::gplvm::kernel::{Kernel, rows_of};
 use crate::gplvm::{DriftStats, Fit, GramData, OptimizerKind};
@@ -33,6 +33,12 @@ pub struct StoreRef {
     pub bytes: u64,
     /// Its checksum ([`Store::checksum`]), hex.
     pub checksum: String,
+    /// Its identity at the fit ([`Store::identity`]): while it is the same,
+    /// opening the model does not checksum the store again. Absent in
+    /// models written before it was recorded, or where the boot cannot be
+    /// told.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub identity: Option<StoreIdentity>,
 }
 
 /// What the optimiser did, for the record.
@@ -134,6 +140,7 @@ impl ModelFile {
                 path: store_name,
                 bytes: store.len_bytes(),
                 checksum: format!("{:016x}", store.checksum()),
+                identity: store.identity(),
             },
         }
     }

@@ -55,9 +55,24 @@ impl std::fmt::Debug for Model {
 
 impl Model {
     /// Open a model file and its store; check format, version, shapes, the
-    /// store's size and checksum, and factorise `K`.
+    /// store's size and checksum, and factorise `K`. The checksum (a read of
+    /// the whole store: about 0.25 s for 100 materials from the page cache,
+    /// seconds from disk) is skipped while the store's identity is the one
+    /// the fit recorded ([`StoreIdentity`]: the same file, not written since,
+    /// no restart of the machine since); [`Model::open_verified`] always
+    /// takes it.
     pub fn open(path: impl AsRef<Path>) -> Result<Model> {
-        let path = path.as_ref().to_path_buf();
+        Model::open_with(path.as_ref(), false)
+    }
+
+    /// [`Model::open`] that checksums the store whatever its identity says:
+    /// for a store that may have been damaged on the disk itself.
+    pub fn open_verified(path: impl AsRef<Path>) -> Result<Model> {
+        Model::open_with(path.as_ref(), true)
+    }
+
+    fn open_with(path: &Path, verify: bool) -> Result<Model> {
+        let path = path.to_path_buf();
         let text = std::fs::read(&path).map_err(|e| CoreError::io(&path, e))?;
         let file = ModelFile::from_json(&path, &text)?;
         let dir = path.parent().unwrap_or(Path::new("."));
@@ -73,13 +88,16 @@ impl Model {
             )));
         }
         check_store(&file, &store)?;
-        let checksum = format!("{:016x}", store.checksum());
-        if checksum != file.store.checksum {
-            return Err(sbad(format!(
-                "checksum {checksum} differs from {} recorded in {} (the store was changed)",
-                file.store.checksum,
-                path.display()
-            )));
+        let known = file.store.identity.is_some() && file.store.identity == store.identity();
+        if verify || !known {
+            let checksum = format!("{:016x}", store.checksum());
+            if checksum != file.store.checksum {
+                return Err(sbad(format!(
+                    "checksum {checksum} differs from {} recorded in {} (the store was changed)",
+                    file.store.checksum,
+                    path.display()
+                )));
+            }
         }
         // Changed while being checksummed: say so, not "checksum differs".
         store.verify()?;
@@ -379,6 +397,62 @@ mod tests {
         std::fs::write(&store, &bytes).unwrap();
         let e = Model::open(&path).unwrap_err().to_string();
         assert!(e.contains("checksum") && e.contains("m.atlas.store"), "{e}");
+    }
+
+    #[test]
+    fn a_store_known_by_its_identity_is_not_checksummed_again() {
+        let tmp = tempfile::tempdir().unwrap();
+        let path = fitted(tmp.path());
+        let store = store_path_for(&path);
+        let file = Model::open(&path).unwrap().file().clone();
+        let id = file
+            .store
+            .identity
+            .clone()
+            .expect("the fit records the store's identity");
+        assert_eq!(Some(&id), Store::open(&store).unwrap().identity().as_ref());
+        // Written by nothing since: dated before the fit ended.
+        let modified = std::fs::metadata(&store).unwrap().modified().unwrap();
+        assert!(modified < std::time::SystemTime::now());
+        // A model whose recorded checksum no longer matches opens while the
+        // store is the one it knows (the checksum is not taken)...
+        let wrong = |mut f: ModelFile, edit: &dyn Fn(&mut ModelFile)| {
+            f.store.checksum = "0123456789abcdef".into();
+            edit(&mut f);
+            let json = f.to_json(&path).unwrap();
+            std::fs::write(&path, json).unwrap();
+        };
+        wrong(file.clone(), &|_| ());
+        Model::open(&path).unwrap();
+        // ... but not when asked to verify, nor once the identity differs:
+        // another boot, another file, or the same file written again, even
+        // with the same bytes at once.
+        let e = Model::open_verified(&path).unwrap_err().to_string();
+        assert!(e.contains("checksum") && e.contains("m.atlas.store"), "{e}");
+        let refused = |why: &str| {
+            let e = Model::open(&path).unwrap_err().to_string();
+            assert!(e.contains("checksum"), "{why}: {e}");
+        };
+        wrong(file.clone(), &|f| {
+            f.store.identity.as_mut().unwrap().boot = "another".into()
+        });
+        refused("another boot");
+        wrong(file.clone(), &|f| {
+            f.store.identity.as_mut().unwrap().inode += 1
+        });
+        refused("another file");
+        wrong(file.clone(), &|_| ());
+        Model::open(&path).unwrap();
+        let bytes = std::fs::read(&store).unwrap();
+        std::fs::write(&store, &bytes).unwrap();
+        refused("written again");
+        // With the right checksum the rewritten store opens (checksummed).
+        std::fs::write(&path, file.to_json(&path).unwrap()).unwrap();
+        Model::open(&path).unwrap();
+        // A model without an identity (written before it was recorded) is
+        // always checksummed.
+        wrong(file, &|f| f.store.identity = None);
+        refused("no identity");
     }
 
     #[test]

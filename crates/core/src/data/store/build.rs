@@ -361,6 +361,12 @@ pub fn build_store(
     if let Some(e) = write_error.into_inner().expect("no panics while locked") {
         return Err(CoreError::write(out, e));
     }
+    // Dated a second before now: a later write to the store, however soon,
+    // gives it another modification time, so the identity a model records
+    // (`Store::identity`) is never that of a store changed since.
+    let written = std::time::SystemTime::now() - std::time::Duration::from_secs(1);
+    file.set_modified(written)
+        .map_err(|e| CoreError::write(out, e))?;
     pending
         .commit(false)
         .map_err(|e| CoreError::write(out, e))?;

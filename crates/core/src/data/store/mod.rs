@@ -358,10 +358,55 @@ impl Store {
         y
     }
 
+    /// The store file's identity when it was opened: which file on which
+    /// device, its size and last modification, and the boot of the machine
+    /// ([`StoreIdentity`]); `None` where the boot cannot be told (not Linux).
+    pub fn identity(&self) -> Option<StoreIdentity> {
+        let s = self.map.stamp();
+        Some(StoreIdentity {
+            boot: boot_id()?.to_owned(),
+            device: s.dev,
+            inode: s.ino,
+            bytes: s.size,
+            modified: [s.mtime.0, s.mtime.1],
+        })
+    }
+
     /// Checksum of the whole file (xxh3 of the xxh3 of each 8 MiB block, in order).
     pub fn checksum(&self) -> u64 {
         checksum_bytes(&self.map)
     }
+}
+
+/// A store file as the machine knows it: the same identity means the same
+/// file, not written to since, and no restart of the machine in between (a
+/// store is not synced: a crash may leave it with its size and times but
+/// without its content). A model records its store's identity at the fit,
+/// and opening the model checksums the store only when the identity differs.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct StoreIdentity {
+    /// The kernel's boot id (`/proc/sys/kernel/random/boot_id`).
+    pub boot: String,
+    /// Device of the file system.
+    pub device: u64,
+    /// Inode number.
+    pub inode: u64,
+    /// Size in bytes.
+    pub bytes: u64,
+    /// Last modification: seconds and nanoseconds since the epoch.
+    pub modified: [i64; 2],
+}
+
+/// This boot of the machine's id, read once; `None` where there is none.
+fn boot_id() -> Option<&'static str> {
+    static BOOT: std::sync::OnceLock<Option<String>> = std::sync::OnceLock::new();
+    BOOT.get_or_init(|| {
+        std::fs::read_to_string("/proc/sys/kernel/random/boot_id")
+            .ok()
+            .map(|s| s.trim().to_owned())
+            .filter(|s| !s.is_empty())
+    })
+    .as_deref()
 }
 
 /// Checksum of a byte slice as [`Store::checksum`] defines it.
