@@ -136,8 +136,16 @@ fn delays() -> impl Iterator<Item = Duration> {
         .map(Duration::from_millis)
 }
 
-fn fit_args<'a>(m: &'a Path, model: &'a Path) -> [&'a str; 4] {
-    ["fit", m.to_str().unwrap(), "-o", model.to_str().unwrap()]
+/// A fit that builds its store every time (a re-fit of unchanged inputs
+/// would use the last one's again, and be over before the signal).
+fn fit_args<'a>(m: &'a Path, model: &'a Path) -> [&'a str; 5] {
+    [
+        "fit",
+        m.to_str().unwrap(),
+        "-o",
+        model.to_str().unwrap(),
+        "--rebuild-store",
+    ]
 }
 
 #[test]

@@ -115,9 +115,14 @@ fn choice<T>(value: &str, option: &str, parse: fn(&str) -> Option<T>, names: &st
 /// every 0.1 s or so while it runs and when it ends; an exception it raises
 /// is raised again once the fit has finished (the fit is not interrupted).
 ///
-/// Returns a dict: `model`, `store` (paths), `names`, `ignored` (entries left
-/// out, with why), `cost`, `initial_cost`, `iterations`, `evaluations`, and
-/// `seconds` (per phase: scan, store, optimise, save).
+/// A re-fit into the same `out` of the same files, unchanged since, with
+/// the same `transform` and `store_precision` uses the existing store again
+/// (no store pass): `store_reused` says so.
+///
+/// Returns a dict: `model`, `store` (paths), `store_reused`, `names`,
+/// `ignored` (entries left out, with why), `cost`, `initial_cost`,
+/// `iterations`, `evaluations`, and `seconds` (per phase: scan, store,
+/// optimise, save).
 #[pyfunction]
 #[pyo3(signature = (merl_dir, out, *, q = 2, transform = "log", optimizer = "lbfgs",
                     store_precision = "f32", length_scale = 1.0, noise = 1e-4, min_step = 1e-3,
@@ -207,6 +212,7 @@ pub fn fit<'py>(
     let d = PyDict::new(py);
     d.set_item("model", &report.model_path)?;
     d.set_item("store", &report.store_path)?;
+    d.set_item("store_reused", report.store_reused)?;
     d.set_item("names", &report.names)?;
     let ignored: Vec<(PathBuf, String)> = report.ignored.clone();
     d.set_item("ignored", ignored)?;

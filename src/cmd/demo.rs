@@ -183,6 +183,7 @@ fn fit_model(state: &mut State) -> Result<(), Error> {
         noise: fit::DEFAULT_NOISE,
         learn_kernel: false,
         min_step: fit::DEFAULT_MIN_STEP,
+        rebuild_store: false,
     };
     let fitted = fit::fit(&args)?;
     indented(|out| Ok(fit::write_summary(out, &args, &fitted)?))?;

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 
 use brdf_atlas_core::limits::MAX_Q;
 use brdf_atlas_core::{Dataset, GplvmParams, OptimizerKind, Store};
-use brdf_atlas_core::{FitOptions, FitReport, fit_dir, store_path_for};
+use brdf_atlas_core::{FitOptions, FitReport, StorePolicy, fit_dir_with, store_path_for};
 
 use crate::args::{OptimizerArg, PrecisionArg, TransformArg};
 use crate::error::Error;
@@ -65,6 +65,13 @@ pub struct Args {
     /// Hooke-Jeeves stops when its step falls below this.
     #[arg(long, default_value_t = DEFAULT_MIN_STEP, allow_negative_numbers = true)]
     pub min_step: f64,
+    /// Build the store anew even when the model's own can be used again. A
+    /// re-fit into the same model of the same files, unchanged since, with
+    /// the same `--transform` and `--store-precision`, otherwise skips the
+    /// store pass (other settings, such as `--q` or `--optimizer`, only
+    /// change the search).
+    #[arg(long)]
+    pub rebuild_store: bool,
 }
 
 /// `--q`'s help, with the bound the fit checks ([`MAX_Q`]).
@@ -118,7 +125,12 @@ pub fn fit(args: &Args) -> Result<Fitted, Error> {
     let store_path = store_path_for(&args.model);
     let store_existed = store_path.exists();
     let bars = Bars::new(format!("opening {}", args.dir.display()));
-    let result = fit_dir(&args.dir, &args.model, &fit_options, &bars);
+    let policy = if args.rebuild_store {
+        StorePolicy::Rebuild
+    } else {
+        StorePolicy::Reuse
+    };
+    let result = fit_dir_with(&args.dir, &args.model, &fit_options, policy, &bars);
     drop(bars);
     let report = match result {
         Ok(report) => report,
@@ -188,10 +200,15 @@ pub fn write_summary(out: &mut impl Write, args: &Args, fitted: &Fitted) -> io::
     )?;
     writeln!(
         out,
-        "  store      {} ({}, {})",
+        "  store      {} ({}, {}){}",
         r.store_path.display(),
         store.precision().name(),
-        size(store.len_bytes())
+        size(store.len_bytes()),
+        if r.store_reused {
+            ", used again: the same input files, unchanged since the last fit"
+        } else {
+            ""
+        }
     )?;
     writeln!(
         out,
@@ -234,8 +251,13 @@ pub fn write_summary(out: &mut impl Write, args: &Args, fitted: &Fitted) -> io::
     let total = r.scan_time + r.store_time + r.optimise_time + r.save_time;
     writeln!(
         out,
-        "  time       scan {}, store+Gram {}, optimise {}, save {}, total {}",
+        "  time       scan {}, {} {}, optimise {}, save {}, total {}",
         secs(r.scan_time),
+        if r.store_reused {
+            "store check"
+        } else {
+            "store+Gram"
+        },
         secs(r.store_time),
         secs(r.optimise_time),
         secs(r.save_time),

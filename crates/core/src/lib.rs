@@ -48,7 +48,8 @@ pub use eval::{loo, measure};
 pub use gplvm::optim;
 pub use gplvm::{CheckedParams, DriftStats, Fit, GplvmParams, GramData, Kernel, OptimizerKind};
 pub use model::{
-    FitOptions, FitRecord, FitReport, Model, ModelFile, StoreRef, fit_dir, store_path_for,
+    FitOptions, FitRecord, FitReport, InputIdentity, Model, ModelFile, StorePolicy, StoreRef,
+    fit_dir, fit_dir_with, store_path_for,
 };
 pub use progress::{NoProgress, Progress};
 pub use query::{

@@ -153,6 +153,11 @@ impl MerlFile {
         &self.path
     }
 
+    /// Which file it was, its size and last modification, when it was mapped.
+    pub fn stamp(&self) -> brdf_mapguard::Stamp {
+        self.map.stamp()
+    }
+
     /// Table dims from the header.
     pub fn dims(&self) -> Dims {
         self.dims

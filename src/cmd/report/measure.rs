@@ -8,7 +8,6 @@ use std::io::Write;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use brdf_atlas_core::ModelFile;
 use brdf_atlas_core::loo::{self, Evaluation};
 use brdf_atlas_core::measure::{map_error, reference_albedo};
 use brdf_atlas_core::{AlbedoMethod, BlendRule, DEFAULT_SAMPLES, View};
@@ -16,6 +15,7 @@ use brdf_atlas_core::{Dataset, build_store};
 use brdf_atlas_core::{
     Fit, GplvmParams, GramData, Model, NoProgress, OptimizerKind, Precision, Store, TransformKind,
 };
+use brdf_atlas_core::{ModelFile, StoreRef};
 use brdf_merl::Quadrature;
 use faer::Mat;
 
@@ -515,7 +515,8 @@ fn in_memory_model(
         .file_name()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let file = ModelFile::new(data.names.clone(), fit, store, y.as_ref(), gram, store_name);
+    let store_ref = StoreRef::of(store, store_name);
+    let file = ModelFile::new(data.names.clone(), fit, store, y.as_ref(), gram, store_ref);
     let store = Store::open(store.path())?;
     Ok(Model::new(work.join(format!("{name}.atlas")), file, store)?)
 }

@@ -13,7 +13,7 @@ use brdf_merl::Dims;
 use faer::MatRef;
 use serde::{Deserialize, Serialize};
 
-use crate::data::{Precision, Store, StoreIdentity, TransformKind};
+use crate::data::{Dataset, Precision, Store, StoreIdentity, TransformKind};
 use crate::error::{CoreError, Result};
 use crate::gplvm::kernel::{Kernel, rows_of};
 use crate::gplvm::{DriftStats, Fit, GramData, OptimizerKind};
@@ -96,20 +96,77 @@ pub struct ModelFile {
     pub gram: Vec<Vec<f64>>,
     /// The store.
     pub store: StoreRef,
+    /// The input files the store was built from, as the fit saw them: a
+    /// re-fit of the same files into the same model, with the same
+    /// transform and precision, uses the store again instead of building
+    /// it anew. Absent in models written before it was recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inputs: Option<Vec<InputIdentity>>,
+}
+
+/// An input file of a fit as the fit saw it: its name in the data
+/// directory, which file it was, its size and last modification.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct InputIdentity {
+    /// File name in the data directory.
+    pub name: String,
+    /// Device of the file system.
+    pub device: u64,
+    /// Inode number.
+    pub inode: u64,
+    /// Size in bytes.
+    pub bytes: u64,
+    /// Last modification: seconds and nanoseconds since the epoch.
+    pub modified: [i64; 2],
+}
+
+impl InputIdentity {
+    /// The identities of a dataset's files, in its order.
+    pub fn of(data: &Dataset) -> Vec<InputIdentity> {
+        data.files
+            .iter()
+            .map(|f| {
+                let s = f.stamp();
+                InputIdentity {
+                    name: f
+                        .path()
+                        .file_name()
+                        .map(|n| n.to_string_lossy().into_owned())
+                        .unwrap_or_default(),
+                    device: s.dev,
+                    inode: s.ino,
+                    bytes: s.size,
+                    modified: [s.mtime.0, s.mtime.1],
+                }
+            })
+            .collect()
+    }
+}
+
+impl StoreRef {
+    /// The reference to `store`, named `path` beside its model file:
+    /// size, checksum (a read of the whole store) and identity.
+    pub fn of(store: &Store, path: String) -> StoreRef {
+        StoreRef {
+            path,
+            bytes: store.len_bytes(),
+            checksum: format!("{:016x}", store.checksum()),
+            identity: store.identity(),
+        }
+    }
 }
 
 impl ModelFile {
     /// The model file of `fit` on `store` (materials `names`, in store
     /// order; `y` the Gram matrix before normalisation, `gram` the fitted
-    /// data; the store named `store_name` beside the model file).
-    /// Checksums the store.
+    /// data; `store_ref` the store's reference, [`StoreRef::of`]).
     pub fn new(
         names: Vec<String>,
         fit: &Fit,
         store: &Store,
         y: MatRef<'_, f64>,
         gram: &GramData,
-        store_name: String,
+        store_ref: StoreRef,
     ) -> ModelFile {
         let dims = store.dims();
         let o = &fit.outcome;
@@ -136,12 +193,8 @@ impl ModelFile {
                 eigenvalues: fit.eigenvalues.clone(),
             },
             gram: rows_of(y),
-            store: StoreRef {
-                path: store_name,
-                bytes: store.len_bytes(),
-                checksum: format!("{:016x}", store.checksum()),
-                identity: store.identity(),
-            },
+            store: store_ref,
+            inputs: None,
         }
     }
 }

@@ -8,8 +8,8 @@ use std::time::{Duration, Instant};
 
 use brdf_atomic::{Swapped, stage, swap_in};
 
-use super::file::{ModelFile, store_path_for};
-use crate::data::{Dataset, Precision, TransformKind, build_store};
+use super::file::{InputIdentity, ModelFile, StoreRef, store_path_for};
+use crate::data::{Dataset, Precision, Store, TransformKind, build_store};
 use crate::error::{CoreError, Result};
 use crate::gplvm::{CheckedParams, Fit, GramData};
 use crate::progress::Progress;
@@ -41,8 +41,13 @@ pub struct FitReport {
     /// Opening the MERL files (mapping, header and size checks; their
     /// values are checked as the store pass reads them).
     pub scan_time: Duration,
-    /// The one pass building the store and the Gram matrix.
+    /// The one pass building the store and the Gram matrix (or checking
+    /// that the store can be used again, [`FitReport::store_reused`]).
     pub store_time: Duration,
+    /// The model's existing store was used again: the same input files,
+    /// unchanged, with the same transform and precision, and the store as
+    /// its fit left it. Nothing but the model file was written.
+    pub store_reused: bool,
     /// The optimisation.
     pub optimise_time: Duration,
     /// Writing the model and checksumming the store.
@@ -57,11 +62,36 @@ pub struct FitReport {
     pub peak_private: Option<u64>,
 }
 
-/// Fit a directory of MERL files and write `model` and `model.store`.
+/// Whether a fit may use the model's existing store again.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StorePolicy {
+    /// Use it again when it holds exactly what this fit would build (the
+    /// same input files, unchanged, with the same transform and precision;
+    /// [`FitReport::store_reused`]): a re-fit with other settings of the
+    /// GPLVM then skips the store pass.
+    Reuse,
+    /// Always build the store anew.
+    Rebuild,
+}
+
+/// Fit a directory of MERL files and write `model` and `model.store`,
+/// using the model's existing store again where it can
+/// ([`StorePolicy::Reuse`]).
 pub fn fit_dir(
     dir: &Path,
     model: &Path,
     options: &FitOptions,
+    progress: &dyn Progress,
+) -> Result<FitReport> {
+    fit_dir_with(dir, model, options, StorePolicy::Reuse, progress)
+}
+
+/// [`fit_dir`] with the store's policy chosen.
+pub fn fit_dir_with(
+    dir: &Path,
+    model: &Path,
+    options: &FitOptions,
+    policy: StorePolicy,
     progress: &dyn Progress,
 ) -> Result<FitReport> {
     let t0 = Instant::now();
@@ -79,6 +109,7 @@ pub fn fit_dir(
         &data,
         model,
         options,
+        policy,
         progress,
         &store_path,
         &staging,
@@ -108,6 +139,7 @@ fn fit_staged(
     data: &Dataset,
     model: &Path,
     options: &FitOptions,
+    policy: StorePolicy,
     progress: &dyn Progress,
     store_path: &Path,
     staging: &Path,
@@ -115,22 +147,37 @@ fn fit_staged(
     t1: Instant,
     private: &PrivatePeak,
 ) -> Result<FitReport> {
-    let (store, y) = build_store(
-        data,
-        options.transform,
-        options.precision,
-        staging,
-        progress,
-    )?;
+    let inputs = InputIdentity::of(data);
+    let reused = match policy {
+        StorePolicy::Reuse => reusable(model, store_path, options, &inputs),
+        StorePolicy::Rebuild => None,
+    };
+    let store_reused = reused.is_some();
+    let (store, y, old_ref) = match reused {
+        Some((store, y, old_ref)) => (store, y, Some(old_ref)),
+        None => {
+            let (store, y) = build_store(
+                data,
+                options.transform,
+                options.precision,
+                staging,
+                progress,
+            )?;
+            (store, y, None)
+        }
+    };
     let store_time = t1.elapsed();
     let t2 = Instant::now();
     let file_y = y.clone();
     let gram = GramData::new(y, store.rows())?;
     // The optimisation runs on one core: meanwhile the other drops the old
     // store's cached pages (the file stays as it is until the new model is
-    // in place), so removing it at the end is quick.
+    // in place), so removing it at the end is quick; unless it is the store
+    // this fit uses.
     let fit = std::thread::scope(|scope| {
-        scope.spawn(|| brdf_atomic::evict_cached(store_path));
+        if !store_reused {
+            scope.spawn(|| brdf_atomic::evict_cached(store_path));
+        }
         options.params.fit(&gram, progress)
     })?;
     let optimise_time = t2.elapsed();
@@ -139,14 +186,16 @@ fn fit_staged(
         .file_name()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let file = ModelFile::new(
+    let store_ref = old_ref.unwrap_or_else(|| StoreRef::of(&store, store_name));
+    let mut file = ModelFile::new(
         data.names.clone(),
         &fit,
         &store,
         file_y.as_ref(),
         &gram,
-        store_name,
+        store_ref,
     );
+    file.inputs = Some(inputs);
     // Both files are complete on disk before either takes its place.
     let json = file.to_json(model)?;
     let staged = stage(model, |w| std::io::Write::write_all(w, &json))
@@ -160,6 +209,24 @@ fn fit_staged(
     // The store goes in by an exchange, so the old one (if any) is still at
     // hand until the model, the commit point, is in place. An interrupt
     // waits for the pair (`critical`), so it never sees one without the other.
+    if store_reused {
+        // The store stays where it is: only the model changes.
+        brdf_atomic::critical(|| staged.commit(false)).map_err(|e| CoreError::write(model, e))?;
+        return Ok(FitReport {
+            names: data.names.clone(),
+            ignored: data.ignored.clone(),
+            fit,
+            model_path: model.to_path_buf(),
+            store_path: store_path.to_path_buf(),
+            scan_time,
+            store_time,
+            store_reused,
+            optimise_time,
+            save_time: t3.elapsed(),
+            peak_heap: crate::heap::peak(),
+            peak_private: private.peak(),
+        });
+    }
     let swapped = brdf_atomic::critical(|| {
         let swapped = swap_in(staging, store_path).map_err(|e| CoreError::write(store_path, e))?;
         if let Err(e) = staged.commit(false) {
@@ -187,11 +254,45 @@ fn fit_staged(
         store_path: store_path.to_path_buf(),
         scan_time,
         store_time,
+        store_reused,
         optimise_time,
         save_time,
         peak_heap: crate::heap::peak(),
         peak_private: private.peak(),
     })
+}
+
+/// The store of the model at `model`, with its Gram matrix and reference,
+/// when a fit with `options` of the files `inputs` would build the same
+/// store again: the model records the same inputs (names, files, sizes,
+/// modification times), transform and precision, and the store is the file
+/// its fit wrote ([`crate::data::StoreIdentity`]). Anything else (no model,
+/// an older one without inputs, an unreadable one) builds anew.
+fn reusable(
+    model: &Path,
+    store_path: &Path,
+    options: &FitOptions,
+    inputs: &[InputIdentity],
+) -> Option<(Store, faer::Mat<f64>, StoreRef)> {
+    let text = std::fs::read(model).ok()?;
+    let old = ModelFile::from_json(model, &text).ok()?;
+    let same = old.inputs.as_deref() == Some(inputs)
+        && old.transform == options.transform
+        && old.precision == options.precision
+        && store_path
+            .file_name()
+            .is_some_and(|n| *n == *old.store.path)
+        && old.store.identity.is_some();
+    if !same {
+        return None;
+    }
+    let store = Store::open(store_path).ok()?;
+    if store.identity() != old.store.identity || store.len_bytes() != old.store.bytes {
+        return None;
+    }
+    let n = old.names.len();
+    let y = faer::Mat::from_fn(n, n, |i, j| old.gram[i][j]);
+    Some((store, y, old.store))
 }
 
 /// The process's largest private memory ([`crate::heap::private`]) while

@@ -24,8 +24,8 @@ use crate::error::{CoreError, Result};
 pub mod file;
 pub mod fit;
 
-pub use file::{FitRecord, ModelFile, StoreRef, store_path_for};
-pub use fit::{FitOptions, FitReport, fit_dir};
+pub use file::{FitRecord, InputIdentity, ModelFile, StoreRef, store_path_for};
+pub use fit::{FitOptions, FitReport, StorePolicy, fit_dir, fit_dir_with};
 
 /// An opened model: the file, its store mapped, `K` factorised.
 pub struct Model {
@@ -300,7 +300,7 @@ pub(crate) struct MapBasis {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::data::{Precision, TransformKind};
+    use crate::data::{Dataset, Precision, TransformKind};
     use crate::gplvm::GplvmParams;
     use crate::progress::NoProgress;
 
@@ -453,6 +453,80 @@ mod tests {
         // always checksummed.
         wrong(file, &|f| f.store.identity = None);
         refused("no identity");
+    }
+
+    #[test]
+    fn a_refit_of_unchanged_inputs_uses_the_store_again() {
+        let tmp = tempfile::tempdir().unwrap();
+        let path = fitted(tmp.path());
+        let store = store_path_for(&path);
+        let options = |q: usize, transform| FitOptions {
+            params: GplvmParams::new(q).check().unwrap(),
+            transform,
+            precision: Precision::F32,
+        };
+        let refit = |q: usize, transform, policy| {
+            fit_dir_with(
+                tmp.path(),
+                &path,
+                &options(q, transform),
+                policy,
+                &NoProgress,
+            )
+            .unwrap()
+            .store_reused
+        };
+        let (model_bytes, store_bytes) = (
+            std::fs::read(&path).unwrap(),
+            std::fs::read(&store).unwrap(),
+        );
+        let store_id = Model::open(&path).unwrap().file().store.identity.clone();
+        // The same fit again: the same store file, untouched, and the same model.
+        assert!(refit(2, TransformKind::Log, StorePolicy::Reuse));
+        assert_eq!(std::fs::read(&path).unwrap(), model_bytes);
+        assert_eq!(Store::open(&store).unwrap().identity(), store_id);
+        // Another latent dimension on the store used again gives what a
+        // fresh fit with a store of its own gives.
+        assert!(refit(3, TransformKind::Log, StorePolicy::Reuse));
+        let fresh = tmp.path().join("fresh.atlas");
+        fit_dir(
+            tmp.path(),
+            &fresh,
+            &options(3, TransformKind::Log),
+            &NoProgress,
+        )
+        .unwrap();
+        let (a, b) = (Model::open(&path).unwrap(), Model::open(&fresh).unwrap());
+        assert_eq!(a.file().latent, b.file().latent);
+        assert_eq!(a.file().gram, b.file().gram);
+        assert_eq!(a.file().fit.cost, b.file().fit.cost);
+        assert_eq!(std::fs::read(&store).unwrap(), store_bytes);
+        // Built anew when asked, or when anything the store holds may differ.
+        assert!(!refit(2, TransformKind::Log, StorePolicy::Rebuild));
+        assert!(refit(2, TransformKind::Log, StorePolicy::Reuse));
+        assert!(!refit(2, TransformKind::Raw, StorePolicy::Reuse));
+        assert!(!refit(2, TransformKind::Log, StorePolicy::Reuse));
+        let input = Dataset::map_dir(tmp.path()).unwrap().files[2]
+            .path()
+            .to_path_buf();
+        let later = std::time::SystemTime::now() + std::time::Duration::from_secs(5);
+        std::fs::File::options()
+            .write(true)
+            .open(&input)
+            .unwrap()
+            .set_modified(later)
+            .unwrap();
+        assert!(
+            !refit(2, TransformKind::Log, StorePolicy::Reuse),
+            "an input touched"
+        );
+        std::fs::write(&store, std::fs::read(&store).unwrap()).unwrap();
+        assert!(
+            !refit(2, TransformKind::Log, StorePolicy::Reuse),
+            "the store written"
+        );
+        assert!(refit(2, TransformKind::Log, StorePolicy::Reuse));
+        Model::open_verified(&path).unwrap();
     }
 
     #[test]
