@@ -136,6 +136,21 @@ fn fit_writes_the_model_and_its_store_and_summarises() {
     }
     let m = Model::open(&model).unwrap();
     assert_eq!(m.file().fit.optimizer, OptimizerKind::HookeJeeves);
+    // The same files again, another q: the store is used again, and said so.
+    let out = brdf_atlas([
+        Path::new("fit"),
+        &data,
+        Path::new("-o"),
+        &model,
+        Path::new("--q"),
+        Path::new("3"),
+    ]);
+    let (stdout, stderr) = texts(&out);
+    assert!(out.status.success(), "{stderr}");
+    for want in ["(f32, ", "used again", "store check "] {
+        assert!(stdout.contains(want), "{want:?} in\n{stdout}");
+    }
+    assert_eq!(Model::open(&model).unwrap().q(), 3);
 }
 
 #[test]
