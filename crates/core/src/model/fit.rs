@@ -206,9 +206,6 @@ fn fit_staged(
             std::io::Error::new(std::io::ErrorKind::IsADirectory, "is a directory"),
         ));
     }
-    // The store goes in by an exchange, so the old one (if any) is still at
-    // hand until the model, the commit point, is in place. An interrupt
-    // waits for the pair (`critical`), so it never sees one without the other.
     if store_reused {
         // The store stays where it is: only the model changes.
         brdf_atomic::critical(|| staged.commit(false)).map_err(|e| CoreError::write(model, e))?;
@@ -227,6 +224,9 @@ fn fit_staged(
             peak_private: private.peak(),
         });
     }
+    // The store goes in by an exchange, so the old one (if any) is still at
+    // hand until the model, the commit point, is in place. An interrupt
+    // waits for the pair (`critical`), so it never sees one without the other.
     let swapped = brdf_atomic::critical(|| {
         let swapped = swap_in(staging, store_path).map_err(|e| CoreError::write(store_path, e))?;
         if let Err(e) = staged.commit(false) {
