@@ -51,8 +51,16 @@ fn an_input_truncated_during_fit_is_one_named_error_and_the_old_model_stays() {
     inputs.sort();
     let victim = &inputs[2];
 
+    // `--rebuild-store`: unchanged inputs would otherwise reuse the store
+    // and never enter the pass.
     let child = Command::new(env!("CARGO_BIN_EXE_brdf-atlas"))
-        .args([Path::new("fit"), &data, Path::new("-o"), &model])
+        .args([
+            Path::new("fit"),
+            &data,
+            Path::new("-o"),
+            &model,
+            Path::new("--rebuild-store"),
+        ])
         .env("BRDF_ATLAS_TEST_STOP_IN", "store")
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
