@@ -170,23 +170,31 @@ fn fit_staged(
     let t2 = Instant::now();
     let file_y = y.clone();
     let gram = GramData::new(y, store.rows())?;
-    // The optimisation runs on one core: meanwhile the other drops the old
-    // store's cached pages (the file stays as it is until the new model is
-    // in place), so removing it at the end is quick; unless it is the store
-    // this fit uses.
-    let fit = std::thread::scope(|scope| {
-        if !store_reused {
-            scope.spawn(|| brdf_atomic::evict_cached(store_path));
-        }
-        options.params.fit(&gram, progress)
-    })?;
-    let optimise_time = t2.elapsed();
-    let t3 = Instant::now();
     let store_name = store_path
         .file_name()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let store_ref = old_ref.unwrap_or_else(|| StoreRef::of(&store, store_name));
+    // The optimisation runs on one core: meanwhile the other checksums the
+    // new store (a read of all of it) and drops the old store's cached
+    // pages (the file stays as it is until the new model is in place), so
+    // removing it at the end is quick; unless it is the store this fit uses.
+    let (fit, optimise_time, t3, store_ref) = std::thread::scope(|scope| {
+        let checksum = match old_ref {
+            Some(r) => Err(r),
+            None => {
+                scope.spawn(|| brdf_atomic::evict_cached(store_path));
+                Ok(scope.spawn(|| StoreRef::of(&store, store_name)))
+            }
+        };
+        let fit = options.params.fit(&gram, progress);
+        let (optimise_time, t3) = (t2.elapsed(), Instant::now());
+        let store_ref = match checksum {
+            Err(old) => old,
+            Ok(h) => h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)),
+        };
+        (fit, optimise_time, t3, store_ref)
+    });
+    let fit = fit?;
     let mut file = ModelFile::new(
         data.names.clone(),
         &fit,
