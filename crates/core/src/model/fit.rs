@@ -217,41 +217,29 @@ fn fit_staged(
     if store_reused {
         // The store stays where it is: only the model changes.
         brdf_atomic::critical(|| staged.commit(false)).map_err(|e| CoreError::write(model, e))?;
-        return Ok(FitReport {
-            names: data.names.clone(),
-            ignored: data.ignored.clone(),
-            fit,
-            model_path: model.to_path_buf(),
-            store_path: store_path.to_path_buf(),
-            scan_time,
-            store_time,
-            store_reused,
-            optimise_time,
-            save_time: t3.elapsed(),
-            peak_heap: crate::heap::peak(),
-            peak_private: private.peak(),
-        });
-    }
-    // The store goes in by an exchange, so the old one (if any) is still at
-    // hand until the model, the commit point, is in place. An interrupt
-    // waits for the pair (`critical`), so it never sees one without the other.
-    let swapped = brdf_atomic::critical(|| {
-        let swapped = swap_in(staging, store_path).map_err(|e| CoreError::write(store_path, e))?;
-        if let Err(e) = staged.commit(false) {
-            if swapped == Swapped::Exchanged {
-                // Undo: the old store back beside the old model. Best effort; the
-                // commit's error is the one to report.
-                let _ = swap_in(staging, store_path);
+    } else {
+        // The store goes in by an exchange, so the old one (if any) is still
+        // at hand until the model, the commit point, is in place. An
+        // interrupt waits for the pair (`critical`), so it never sees one
+        // without the other.
+        let swapped = brdf_atomic::critical(|| {
+            let swapped =
+                swap_in(staging, store_path).map_err(|e| CoreError::write(store_path, e))?;
+            if let Err(e) = staged.commit(false) {
+                if swapped == Swapped::Exchanged {
+                    // Undo: the old store back beside the old model. Best
+                    // effort; the commit's error is the one to report.
+                    let _ = swap_in(staging, store_path);
+                }
+                return Err(CoreError::write(model, e));
             }
-            return Err(CoreError::write(model, e));
+            Ok(swapped)
+        })?;
+        if swapped == Swapped::Exchanged {
+            // The old store. Freeing its cached pages is most of the time a
+            // re-fit spends saving; failing to remove it loses nothing.
+            let _ = std::fs::remove_file(staging);
         }
-        Ok(swapped)
-    })?;
-    if swapped == Swapped::Exchanged {
-        // The old store. Freeing its cached pages is most of the time a
-        // re-fit spends saving; failing to remove it
-        // loses nothing.
-        let _ = std::fs::remove_file(staging);
     }
     let save_time = t3.elapsed();
     Ok(FitReport {
