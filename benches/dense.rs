@@ -1,5 +1,6 @@
 //! The library's dense kernels against faer's, at the sizes the fit uses:
 //! the store pass's Gram update of one block (512 rows of 100 materials,
+//! in f64 and, as an f32 store's pass runs it, in f32 lanes,
 //! `Y += Z_b^T Z_b`, lower triangle; a 100-material fit does 8 544 of
 //! them), the optimiser's refactorisation (Cholesky and inverse of an
 //! N x N kernel matrix, N = 100 to 1000; about 1 700 per 100-material fit),
@@ -14,6 +15,7 @@ use std::hint::black_box;
 
 use brdf_atlas_core::dense::Cholesky;
 use brdf_atlas_core::dense::gram::syrk_lower_add;
+use brdf_atlas_core::dense::gram32::syrk_lower_add_f32;
 use brdf_atlas_core::dense::product::matmul;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use faer::linalg::matmul::triangular::{self as tri, BlockStructure};
@@ -42,6 +44,13 @@ fn gram(c: &mut Criterion) {
     g.bench_function("dense::gram", |b| {
         let mut acc = vec![0.0f64; N * N];
         b.iter(|| syrk_lower_add(black_box(&block), ROWS, &mut acc));
+    });
+    // An f32 store's kernel: the same block rounded to f32, summed in f32
+    // lanes within the block.
+    let narrow: Vec<f32> = block.iter().map(|&v| v as f32).collect();
+    g.bench_function("dense::gram32", |b| {
+        let mut acc = vec![0.0f64; N * N];
+        b.iter(|| syrk_lower_add_f32(black_box(&narrow), ROWS, &mut acc));
     });
     g.bench_function("faer triangular matmul", |b| {
         let mut acc = Mat::<f64>::zeros(N, N);

@@ -105,8 +105,8 @@ fn tiles_portable(block: &[f64], len: usize, acc: &mut [f64], triangular: bool) 
 /// (so every tile is a full one), and only the outputs inside the lower
 /// triangle are added.
 #[inline(always)]
-fn walk<const TI: usize, const TJ: usize>(
-    block: &[f64],
+pub(super) fn walk<T, const TI: usize, const TJ: usize>(
+    block: &[T],
     len: usize,
     acc: &mut [f64],
     mut tile: impl FnMut([usize; TI], [usize; TJ], &mut [[f64; TJ]; TI]),
@@ -137,7 +137,7 @@ fn tiles_avx512(block: &[f64], len: usize, acc: &mut [f64], triangular: bool) {
     const TI: usize = 4;
     const TJ: usize = 4;
     let split = len / LANES * LANES;
-    walk::<TI, TJ>(block, len, acc, |rows, cols, sums| {
+    walk::<f64, TI, TJ>(block, len, acc, |rows, cols, sums| {
         assert!(
             rows.iter()
                 .chain(&cols)
@@ -207,7 +207,7 @@ fn tiles_avx2(block: &[f64], len: usize, acc: &mut [f64], triangular: bool) {
     const TI: usize = 2;
     const TJ: usize = 3;
     let split = len / LANES * LANES;
-    walk::<TI, TJ>(block, len, acc, |rows, cols, sums| {
+    walk::<f64, TI, TJ>(block, len, acc, |rows, cols, sums| {
         assert!(
             rows.iter()
                 .chain(&cols)

@@ -19,6 +19,7 @@
 pub mod cholesky;
 pub mod eigen;
 pub mod gram;
+pub mod gram32;
 pub mod product;
 
 pub use cholesky::{Cholesky, NotPositive};

@@ -12,6 +12,7 @@ use faer::Mat;
 
 use crate::data::transform::TransformKind;
 use crate::dense::gram::syrk_lower_add;
+use crate::dense::gram32::syrk_lower_add_f32;
 use crate::error::{CoreError, Result};
 use crate::progress::Progress;
 use crate::simd::fold::{GROUPS, ordered_blocks_then};
@@ -19,34 +20,32 @@ use crate::simd::fold::{GROUPS, ordered_blocks_then};
 use super::{BLOCK_ROWS, Layout, Precision, Store};
 use crate::data::Dataset;
 
-/// Stream `rows` rows of `n` values through `fill(r0, buf)` in blocks of
-/// [`BLOCK_ROWS`] and accumulate `sum_j z_j z_j^T`. `fill` writes a block
-/// material by material: `buf[i * len + r]` is material `i` in row `r0 + r`,
-/// with `len = buf.len() / n` rows in the block. Blocks are grouped into
-/// [`GROUPS`] fixed ranges summed in order ([`ordered_blocks_then`]), so the result does not depend on
-/// how rayon schedules them; each block's products are summed in a fixed
-/// order by [`syrk_lower_add`], on every CPU.
+/// Stream `rows` rows of `n` values in blocks of [`BLOCK_ROWS`] and
+/// accumulate `sum_j z_j z_j^T`: `add(s, rows, acc)` makes the block of the
+/// rows `rows` and adds its `Z_b^T Z_b` to `acc` (`n x n`, column-major,
+/// lower triangle) with [`syrk_lower_add`] (f64 values) or
+/// [`syrk_lower_add_f32`] (an f32 store's). Blocks are grouped into
+/// [`GROUPS`] fixed ranges summed in order ([`ordered_blocks_then`]), so the
+/// result does not depend on how rayon schedules them; each block's
+/// products are summed in a fixed order by the kernel, on every CPU.
 pub(super) fn gram_fold<S: Send>(
     rows: usize,
     n: usize,
     progress: &dyn Progress,
     scratch: impl Fn() -> S + Sync,
-    fill: impl Fn(&mut S, usize, &mut [f64]) + Sync,
+    add: impl Fn(&mut S, std::ops::Range<usize>, &mut [f64]) + Sync,
 ) -> Mat<f64> {
     let partials = ordered_blocks_then(
         rows,
         BLOCK_ROWS,
         gram_groups(n),
-        || (vec![0.0f64; n * n], vec![0.0f64; BLOCK_ROWS * n], scratch()),
-        |(acc, buf, scratch), range| {
+        || (vec![0.0f64; n * n], scratch()),
+        |(acc, scratch), range| {
             let len = range.len();
-            let buf = &mut buf[..len * n];
-            fill(scratch, range.start, buf);
-            // Material-major is column-major rows x n: Y += Z_b^T Z_b.
-            syrk_lower_add(buf, len, acc);
+            add(scratch, range, acc);
             progress.advance(len as u64);
         },
-        |(acc, _, _)| acc,
+        |(acc, _)| acc,
     );
     let mut y = vec![0.0f64; n * n];
     for p in &partials {
@@ -76,29 +75,35 @@ fn gram_groups(n: usize) -> usize {
 const TILE_ROWS: usize = 8;
 
 /// Centre a material-major block (`n` columns of `mean.len()` rows) by the
-/// row means and round each value to the stored type (`to`, and `back` to
-/// f64, so the block then holds exactly what the file will); write it
-/// bin-major, little-endian, into `out` (`rows * n` values), ready to write.
+/// row means and round each value to the stored type (`to`); write it
+/// material-major into `narrow` (the Gram kernel's input, exactly what the
+/// file will hold) and bin-major, little-endian, into `out` (`rows * n`
+/// values), ready to write.
 fn centre_bin_major<T: bytemuck::Pod>(
-    block: &mut [f64],
+    block: &[f64],
     mean: &[f64],
     out: &mut [T],
+    narrow: &mut [T],
     to: impl Fn(f64) -> T,
-    back: impl Fn(T) -> f64,
 ) {
     let rows = mean.len();
     let n = block.len() / rows;
     for t0 in (0..rows).step_by(TILE_ROWS) {
         let t1 = (t0 + TILE_ROWS).min(rows);
         let tile = &mut out[t0 * n..t1 * n];
-        for (col, material) in block.chunks_exact_mut(rows).enumerate() {
-            for ((v, m), dst) in material[t0..t1]
-                .iter_mut()
+        for (col, (material, kept)) in block
+            .chunks_exact(rows)
+            .zip(narrow.chunks_exact_mut(rows))
+            .enumerate()
+        {
+            for (((v, m), k), dst) in material[t0..t1]
+                .iter()
                 .zip(&mean[t0..t1])
+                .zip(&mut kept[t0..t1])
                 .zip(tile[col..].iter_mut().step_by(n))
             {
                 let z = to(*v - m);
-                *v = back(z);
+                *k = z;
                 *dst = z;
             }
         }
@@ -114,29 +119,30 @@ fn centre_bin_major<T: bytemuck::Pod>(
 /// [`centre_bin_major`] into f32: with AVX2, eight rows of four materials at
 /// a time (subtract, round, two 4 x 4 transposes in registers); the same
 /// operations as the scalar path, so the same bits.
-fn centre_bin_major_f32(block: &mut [f64], mean: &[f64], out: &mut [f32]) {
+fn centre_bin_major_f32(block: &[f64], mean: &[f64], out: &mut [f32], narrow: &mut [f32]) {
     #[cfg(target_arch = "x86_64")]
     if crate::simd::has_avx2() {
         // SAFETY: the CPU has AVX2 (checked just above).
-        unsafe { centre_bin_major_f32_avx2(block, mean, out) };
+        unsafe { centre_bin_major_f32_avx2(block, mean, out, narrow) };
         return;
     }
-    centre_bin_major(block, mean, out, |v| v as f32, |z| z as f64);
+    centre_bin_major(block, mean, out, narrow, |v| v as f32);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn centre_bin_major_f32_avx2(block: &mut [f64], mean: &[f64], out: &mut [f32]) {
+fn centre_bin_major_f32_avx2(block: &[f64], mean: &[f64], out: &mut [f32], narrow: &mut [f32]) {
     use std::arch::x86_64::*;
     let rows = mean.len();
     let n = block.len() / rows;
-    assert!(out.len() == rows * n && block.len() == rows * n);
+    assert!(out.len() == rows * n && block.len() == rows * n && narrow.len() == rows * n);
     // Eight rows (one cache line of each material's run) by four materials.
     let (rows8, n4) = (rows / 8 * 8, n / 4 * 4);
-    let (b, o) = (block.as_mut_ptr(), out.as_mut_ptr());
+    let (b, o, w) = (block.as_ptr(), out.as_mut_ptr(), narrow.as_mut_ptr());
     for r0 in (0..rows8).step_by(8) {
         // SAFETY (all loads and stores below): r0 + 7 < rows and i + 3 < n,
-        // so every index is inside `block` (n runs of rows) or `out` (rows of n).
+        // so every index is inside `block` and `narrow` (n runs of rows) or
+        // `out` (rows of n).
         unsafe {
             let m_lo = _mm256_loadu_pd(mean.as_ptr().add(r0));
             let m_hi = _mm256_loadu_pd(mean.as_ptr().add(r0 + 4));
@@ -144,11 +150,12 @@ fn centre_bin_major_f32_avx2(block: &mut [f64], mean: &[f64], out: &mut [f32]) {
                 let mut lo = [_mm_setzero_ps(); 4];
                 let mut hi = [_mm_setzero_ps(); 4];
                 for k in 0..4 {
-                    let p = b.add((i + k) * rows + r0);
+                    let at = (i + k) * rows + r0;
+                    let p = b.add(at);
                     let z_lo = _mm256_cvtpd_ps(_mm256_sub_pd(_mm256_loadu_pd(p), m_lo));
                     let z_hi = _mm256_cvtpd_ps(_mm256_sub_pd(_mm256_loadu_pd(p.add(4)), m_hi));
-                    _mm256_storeu_pd(p, _mm256_cvtps_pd(z_lo));
-                    _mm256_storeu_pd(p.add(4), _mm256_cvtps_pd(z_hi));
+                    _mm_storeu_ps(w.add(at), z_lo);
+                    _mm_storeu_ps(w.add(at + 4), z_hi);
                     lo[k] = z_lo;
                     hi[k] = z_hi;
                 }
@@ -165,13 +172,13 @@ fn centre_bin_major_f32_avx2(block: &mut [f64], mean: &[f64], out: &mut [f32]) {
         }
         for i in n4..n {
             for r in r0..r0 + 8 {
-                centre_one(block, mean, out, (r, i));
+                centre_one(block, mean, (out, narrow), (r, i));
             }
         }
     }
     for r in rows8..rows {
         for i in 0..n {
-            centre_one(block, mean, out, (r, i));
+            centre_one(block, mean, (out, narrow), (r, i));
         }
     }
 }
@@ -179,10 +186,15 @@ fn centre_bin_major_f32_avx2(block: &mut [f64], mean: &[f64], out: &mut [f32]) {
 /// The scalar step of [`centre_bin_major_f32_avx2`]'s remainders: value
 /// `r` of material `i`.
 #[inline(always)]
-fn centre_one(block: &mut [f64], mean: &[f64], out: &mut [f32], (r, i): (usize, usize)) {
+fn centre_one(
+    block: &[f64],
+    mean: &[f64],
+    (out, narrow): (&mut [f32], &mut [f32]),
+    (r, i): (usize, usize),
+) {
     let (rows, n) = (mean.len(), block.len() / mean.len());
     let z = (block[i * rows + r] - mean[r]) as f32;
-    block[i * rows + r] = z as f64;
+    narrow[i * rows + r] = z;
     out[r * n + i] = z;
 }
 
@@ -194,8 +206,13 @@ struct PassScratch {
     /// tally vectorises).
     measured: Vec<f64>,
     unmeasured: Vec<u8>,
+    /// The block's transformed values, material-major.
+    block: Vec<f64>,
     /// The block bin-major in the stored type (f64-sized to hold either).
     out: Vec<f64>,
+    /// The block material-major in the stored type (f64-sized to hold
+    /// either): the Gram kernel's input.
+    narrow: Vec<f64>,
     mean_bytes: Vec<u8>,
 }
 
@@ -206,7 +223,9 @@ impl PassScratch {
             mean: Vec::with_capacity(BLOCK_ROWS),
             measured: Vec::with_capacity(BLOCK_ROWS),
             unmeasured: Vec::with_capacity(BLOCK_ROWS),
+            block: vec![0.0; BLOCK_ROWS * n],
             out: vec![0.0; BLOCK_ROWS * n],
+            narrow: vec![0.0; BLOCK_ROWS * n],
             mean_bytes: Vec::with_capacity(8 * BLOCK_ROWS),
         }
     }
@@ -293,9 +312,10 @@ pub fn build_store(
         n,
         progress,
         || PassScratch::new(n),
-        |s, r0, buf| {
-            let rows = buf.len() / n;
+        |s, range, acc| {
+            let (r0, rows) = (range.start, range.len());
             s.start(rows);
+            let buf = &mut s.block[..rows * n];
             // Transform each material's run of rows into its column of the block.
             for (m, (f, col)) in data
                 .files
@@ -318,16 +338,22 @@ pub fn build_store(
             }
             s.mean.iter_mut().for_each(|m| *m /= n as f64);
             // Centre, round to the stored precision (the Gram matrix sees what
-            // the store holds), and lay the block out bin-major for the file.
+            // the store holds), lay the block out bin-major for the file, and
+            // add its products.
             let bytes: &[u8] = match precision {
                 Precision::F32 => {
                     let out = &mut bytemuck::cast_slice_mut::<f64, f32>(&mut s.out)[..rows * n];
-                    centre_bin_major_f32(buf, &s.mean, out);
+                    let narrow =
+                        &mut bytemuck::cast_slice_mut::<f64, f32>(&mut s.narrow)[..rows * n];
+                    centre_bin_major_f32(buf, &s.mean, out, narrow);
+                    syrk_lower_add_f32(narrow, rows, acc);
                     bytemuck::cast_slice(out)
                 }
                 Precision::F64 => {
                     let out = &mut s.out[..rows * n];
-                    centre_bin_major(buf, &s.mean, out, |v| v, |z| z);
+                    let narrow = &mut s.narrow[..rows * n];
+                    centre_bin_major(buf, &s.mean, out, narrow, |v| v);
+                    syrk_lower_add(narrow, rows, acc);
                     bytemuck::cast_slice(out)
                 }
             };
@@ -388,16 +414,18 @@ mod tests {
         for (rows, n) in [(37, 10), (8, 4), (3, 3), (1024, 100)] {
             let block: Vec<f64> = (0..rows * n).map(|_| rng.range(-5.0, 5.0) * 1e3).collect();
             let mean: Vec<f64> = (0..rows).map(|_| rng.range(-1.0, 1.0)).collect();
-            let (mut a, mut b) = (block.clone(), block);
             let (mut oa, mut ob) = (vec![0f32; rows * n], vec![0f32; rows * n]);
-            centre_bin_major_f32(&mut a, &mean, &mut oa);
-            centre_bin_major(&mut b, &mean, &mut ob, |v| v as f32, |z| z as f64);
-            assert_eq!(a, b);
+            let (mut na, mut nb) = (vec![0f32; rows * n], vec![0f32; rows * n]);
+            centre_bin_major_f32(&block, &mean, &mut oa, &mut na);
+            centre_bin_major(&block, &mean, &mut ob, &mut nb, |v| v as f32);
             assert_eq!(oa, ob);
-            // And the layout: value r of material i at out[r * n + i].
-            for (i, col) in a.chunks_exact(rows).enumerate() {
+            assert_eq!(na, nb);
+            // And the layouts: value r of material i at out[r * n + i] and
+            // narrow[i * rows + r], both the centred value rounded.
+            for (i, col) in block.chunks_exact(rows).enumerate() {
                 for (r, v) in col.iter().enumerate() {
-                    assert_eq!(oa[r * n + i] as f64, *v);
+                    assert_eq!(oa[r * n + i], (v - mean[r]) as f32);
+                    assert_eq!(na[i * rows + r], (v - mean[r]) as f32);
                 }
             }
         }

@@ -46,6 +46,9 @@ mod build;
 pub use build::build_store;
 use build::gram_fold;
 
+use crate::dense::gram::syrk_lower_add;
+use crate::dense::gram32::syrk_lower_add_f32;
+
 const MAGIC: &[u8; 8] = b"BRDFSTOR";
 const VERSION: u32 = 1;
 const HEADER: usize = 64;
@@ -334,8 +337,11 @@ impl Store {
         }
     }
 
-    /// `Y = Z Z^T` from the stored values (f64 accumulation), folded in a
-    /// fixed order: the same bits whatever the thread count.
+    /// `Y = Z Z^T` from the stored values, with the kernel of the pass that
+    /// built the store (f32 lanes within a block for an f32 store, see
+    /// [`crate::dense::gram32`]; f64 throughout for an f64 one; the blocks'
+    /// sums in f64), folded in a fixed order: the same bits as the pass's,
+    /// whatever the thread count.
     pub fn gram(&self, progress: &dyn Progress) -> Mat<f64> {
         progress.start("gram", self.rows() as u64);
         let n = self.n();
@@ -343,13 +349,29 @@ impl Store {
             self.rows(),
             n,
             progress,
-            || vec![0.0f64; n],
-            |row, r0, buf| {
-                let rows = buf.len() / n;
-                for r in 0..rows {
-                    self.copy_rows(r0 + r, row);
-                    for (i, v) in row.iter().enumerate() {
-                        buf[i * rows + r] = *v;
+            || vec![0.0f64; BLOCK_ROWS * n],
+            |buf, range, acc| {
+                let rows = range.len();
+                let (start, len) = (range.start * n, rows * n);
+                // Material-major: value r of material i at i * rows + r.
+                match self.z() {
+                    Rows::F32(z) => {
+                        let narrow = &mut bytemuck::cast_slice_mut::<f64, f32>(buf)[..len];
+                        for (r, row) in z[start..start + len].chunks_exact(n).enumerate() {
+                            row.iter()
+                                .enumerate()
+                                .for_each(|(i, v)| narrow[i * rows + r] = *v);
+                        }
+                        syrk_lower_add_f32(narrow, rows, acc);
+                    }
+                    Rows::F64(z) => {
+                        let block = &mut buf[..len];
+                        for (r, row) in z[start..start + len].chunks_exact(n).enumerate() {
+                            row.iter()
+                                .enumerate()
+                                .for_each(|(i, v)| block[i * rows + r] = *v);
+                        }
+                        syrk_lower_add(block, rows, acc);
                     }
                 }
             },
