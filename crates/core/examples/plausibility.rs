@@ -30,8 +30,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
-/// Leave-one-out errors of the GP, of the convex blend the plausible rule
-/// steps towards, for kernels of several length scales (each narrowed by
+/// Leave-one-out errors of the GP, of its weights projected onto convex
+/// ones, of the convex blend the plausible rule steps towards, for kernels of several length scales (each narrowed by
 /// `CONVEX_LENGTH_RATIO`), and of the plausible rule towards each at several
 /// budgets.
 fn leave_one_out(model: &Model) -> Result<(), Box<dyn std::error::Error>> {
@@ -39,9 +39,12 @@ fn leave_one_out(model: &Model) -> Result<(), Box<dyn std::error::Error>> {
     let gp = loo::gp_predictor(&kernel, latent, true)?;
     let scales = [1.0, 0.5];
     let budgets = [5e-4, 1e-3, 1e-2];
-    let mut predictors = vec![gp.clone()];
-    let mut names = vec!["gp".to_string()];
-    let mut moved = vec![0];
+    // The GP's weights constrained instead of adapted: the nearest
+    // non-negative weights summing to at most one.
+    let projected = loo::projected_predictor(gp.as_ref())?;
+    let mut predictors = vec![gp.clone(), projected];
+    let mut names = vec!["gp".to_string(), "gp projected to convex".to_string()];
+    let mut moved = vec![0, 0];
     let (mut mixes, mut mix_names, mut mix_moved) = (vec![], vec![], vec![]);
     for l in scales {
         let k = brdf_atlas_core::Kernel {

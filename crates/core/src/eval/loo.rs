@@ -47,6 +47,7 @@ const BLOCK: usize = 1024;
 
 pub use super::nonneg::{banded_steps, convex_predictor, plausible_predictors};
 pub use super::predictors::{discarded, gp_predictor, pca_in_sample_predictor, pca_predictor};
+pub use super::projected::{capped_simplex, projected_predictor};
 pub use crate::query::budget::{CLAMP_BUDGET, CONVEX_LENGTH_RATIO, STEPS};
 
 /// Squared errors of one predictor, per material.

@@ -6,3 +6,4 @@ pub mod loo;
 pub mod measure;
 mod nonneg;
 mod predictors;
+mod projected;
