@@ -67,13 +67,24 @@ fn report_writes_every_file_and_fails_atomically() {
         assert_eq!((reader.info().width, reader.info().height), (720, 440));
     }
     // CSV tables: q = 1..3, two transforms, GPLVM, its L-BFGS twin, the
-    // convex blend and the plausible rule at q = 2, and PCA; for the log
-    // transform also the learned kernel's GP, convex blend and plausible rule.
+    // convex blend, the GP's weights projected to convex ones and the
+    // plausible rule at q = 2, and PCA; for the log transform also the
+    // learned kernel's GP, convex blend and plausible rule.
     let loo = std::fs::read_to_string(rep.join("loo.csv")).unwrap();
     assert_eq!(
         loo.lines().count(),
-        1 + 2 * (3 + 1 + 1 + 1 + 3) + 3,
+        1 + 2 * (3 + 1 + 1 + 1 + 1 + 3) + 3,
         "{loo}"
+    );
+    for t in ["log", "raw"] {
+        assert!(
+            loo.contains(&format!("{t},gplvm-projected,2,")),
+            "{t}: {loo}"
+        );
+    }
+    assert!(
+        md.contains("projected to the nearest convex ones"),
+        "report.md lacks the projected weights' line"
     );
     for method in ["gplvm-learned", "convex-learned", "gplvm-learned-plausible"] {
         assert!(loo.contains(&format!("log,{method},2,")), "{method}: {loo}");
@@ -86,7 +97,7 @@ fn report_writes_every_file_and_fails_atomically() {
         }
     }
     let per = std::fs::read_to_string(rep.join("loo-materials.csv")).unwrap();
-    assert_eq!(per.lines().count(), 1 + (2 * 9 + 3) * 6);
+    assert_eq!(per.lines().count(), 1 + (2 * 10 + 3) * 6);
     // Plausibility: a 3 x 3 grid, three models (log with the fixed and the
     // learned kernel, raw), two rules; the plausible rule never clamps more
     // than the GP at the same point.

@@ -355,6 +355,13 @@ fn per_transform(
         });
         mix_labels.push((label, 2));
     }
+    // The fixed kernel's GP weights constrained instead of adapted: the
+    // nearest convex weights (nothing clamped, at a cost in accuracy).
+    if let Some((_, at)) = &kept {
+        let projected = loo::projected_predictor(predictors[*at].as_ref())?;
+        predictors.push(projected);
+        labels.push(("gplvm-projected", 2));
+    }
     for q in 1..=plan.q_max {
         predictors.push(loo::pca_predictor(y.as_ref(), q)?);
         labels.push(("pca", q));
