@@ -20,6 +20,7 @@ use brdf_merl::Quadrature;
 use faer::Mat;
 
 use super::plan::Plan;
+use super::timed;
 use crate::cmd::fit::DEFAULT_MIN_STEP;
 use crate::error::Error;
 use crate::progress::Bars;
@@ -403,24 +404,6 @@ fn per_transform(
         kept: kept.map(|(fit, _)| fit),
         learned: learned.map(|(fit, _)| fit),
     })
-}
-
-/// Median wall time of `f`: once, or three times when one run is short and `repeat`.
-fn timed<T>(repeat: bool, mut f: impl FnMut() -> Result<T, Error>) -> Result<(T, Duration), Error> {
-    let t = Instant::now();
-    let v = f()?;
-    let first = t.elapsed();
-    if !repeat || first > Duration::from_millis(700) {
-        return Ok((v, first));
-    }
-    let mut times = vec![first];
-    for _ in 0..2 {
-        let t = Instant::now();
-        f()?;
-        times.push(t.elapsed());
-    }
-    times.sort();
-    Ok((v, times[1]))
 }
 
 /// Build one store (timed) and its normalised Gram data.

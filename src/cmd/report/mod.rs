@@ -196,3 +196,24 @@ fn write_file(
         source,
     })
 }
+
+/// Median wall time of `f`: once, or three times when one run is short and `repeat`.
+pub(super) fn timed<T>(
+    repeat: bool,
+    mut f: impl FnMut() -> Result<T, Error>,
+) -> Result<(T, Duration), Error> {
+    let t = Instant::now();
+    let v = f()?;
+    let first = t.elapsed();
+    if !repeat || first > Duration::from_millis(700) {
+        return Ok((v, first));
+    }
+    let mut times = vec![first];
+    for _ in 0..2 {
+        let t = Instant::now();
+        f()?;
+        times.push(t.elapsed());
+    }
+    times.sort();
+    Ok((v, times[1]))
+}
