@@ -10,7 +10,7 @@
 
 use std::any::Any;
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, Mutex, OnceLock};
+use std::sync::OnceLock;
 
 use brdf_merl::albedo::Quadrature;
 use brdf_merl::{Dims, DirectionalRule};
@@ -23,6 +23,9 @@ use crate::error::{CoreError, Result};
 
 pub mod file;
 pub mod fit;
+mod recent;
+
+pub(crate) use recent::Recent;
 
 pub use file::{FitRecord, InputIdentity, ModelFile, StoreRef, store_path_for};
 pub use fit::{FitOptions, FitReport, StorePolicy, fit_dir, fit_dir_with};
@@ -289,12 +292,12 @@ pub(crate) struct MapBasis {
     /// The rows of the map's per-pixel rule at its default sample count,
     /// which plan a field (`crate::query::exact`'s `RuleRows`).
     pub(crate) plan_rows: OnceLock<Box<dyn Any + Send + Sync>>,
-    /// The last albedo fields built (`crate::query::field`'s `AlbedoField`),
-    /// oldest first.
-    pub(crate) fields: Mutex<Vec<Arc<dyn Any + Send + Sync>>>,
+    /// The last albedo fields built, and domains given up
+    /// (`crate::query::field`'s cache entries).
+    pub(crate) fields: Recent,
     /// The map's last per-pixel rules (`crate::query::map`'s `PixelRule`),
-    /// one a sample count, oldest first.
-    pub(crate) pixel_rules: Mutex<Vec<Arc<dyn Any + Send + Sync>>>,
+    /// one a sample count.
+    pub(crate) pixel_rules: Recent,
 }
 
 #[cfg(test)]

@@ -57,7 +57,6 @@
 //! fields it built ([`FIELD_CACHE`]), so a viewer that pans and zooms inside
 //! one domain pays for its nodes once.
 
-use std::any::Any;
 use std::sync::Arc;
 
 use crate::dense::product::matmul;
@@ -203,12 +202,8 @@ impl Model {
         view.check()?;
         let domain = domain_of(view);
         let cache = &self.map_basis().fields;
-        let cached = |c: &[Arc<dyn Any + Send + Sync>]| {
-            c.iter()
-                .filter_map(|f| f.clone().downcast::<Cached>().ok())
-                .find(|f| f.domain == domain && (f.field.is_some() || f.budget >= budget))
-        };
-        if let Some(f) = cached(&lock(cache)) {
+        let cached = |f: &Cached| f.domain == domain && (f.field.is_some() || f.budget >= budget);
+        if let Some(f) = cache.find(cached) {
             return Ok(f.field.clone());
         }
         // Plan with the per-pixel rule's rows first: a field that would
@@ -218,22 +213,12 @@ impl Model {
             Some(_) => self.build(domain, budget, progress)?.map(Arc::new),
             None => None,
         };
-        let mut cache = lock(cache);
-        if cached(&cache).is_none() {
-            cache.retain(|f| {
-                f.clone()
-                    .downcast::<Cached>()
-                    .is_ok_and(|f| f.domain != domain)
-            });
-            if cache.len() >= FIELD_CACHE {
-                cache.remove(0);
-            }
-            cache.push(Arc::new(Cached {
-                domain,
-                budget,
-                field: field.clone(),
-            }));
-        }
+        let entry = Arc::new(Cached {
+            domain,
+            budget,
+            field: field.clone(),
+        });
+        cache.keep(entry, FIELD_CACHE, cached, |f| f.domain == domain);
         Ok(field)
     }
 
@@ -349,10 +334,6 @@ pub(crate) fn variances(inv: &[f64], kx: &[f64], n: usize, out: &mut [f32]) {
     {
         *o = (1.0 - dot::dot(k, w)).clamp(0.0, 1.0) as f32;
     }
-}
-
-pub(crate) fn lock<T>(m: &std::sync::Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 /// Exact values at a set of points, `channels` a point.

@@ -19,7 +19,6 @@
 //!   pixels is one matrix product `C k(X_row)`. The sample count trades
 //!   accuracy for time (docs/performance.md has the figures).
 
-use std::any::Any;
 use std::sync::Arc;
 
 use brdf_merl::Quadrature;
@@ -33,7 +32,7 @@ use crate::error::{CoreError, Result};
 use crate::model::Model;
 use crate::progress::Progress;
 use crate::query::exact::RuleRows;
-use crate::query::field::{eval_row, lock, variances};
+use crate::query::field::{eval_row, variances};
 pub use crate::query::view::View;
 use crate::simd::dot;
 use crate::simd::fastexp;
@@ -354,12 +353,8 @@ impl Model {
     /// built (the shaped quadrature rule, its store rows and `C`) and kept.
     fn pixel_rule(&self, samples: usize) -> Arc<PixelRule> {
         let cache = &self.map_basis().pixel_rules;
-        let find = |c: &[Arc<dyn Any + Send + Sync>]| {
-            c.iter()
-                .filter_map(|r| r.clone().downcast::<PixelRule>().ok())
-                .find(|r| r.samples == samples)
-        };
-        if let Some(r) = find(&lock(cache)) {
+        let same = |r: &PixelRule| r.samples == samples;
+        if let Some(r) = cache.find(same) {
             return r;
         }
         let n = self.latent().nrows();
@@ -392,13 +387,7 @@ impl Model {
             c,
             mean,
         });
-        let mut cache = lock(cache);
-        if find(&cache).is_none() {
-            if cache.len() >= PIXEL_RULE_CACHE {
-                cache.remove(0);
-            }
-            cache.push(rule.clone());
-        }
+        cache.keep(rule.clone(), PIXEL_RULE_CACHE, same, |_| false);
         rule
     }
 }
