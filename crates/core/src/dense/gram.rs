@@ -102,7 +102,8 @@ fn tiles_portable(block: &[f64], len: usize, acc: &mut [f64], triangular: bool) 
 /// Walk the lower triangle in tiles of `TI x TJ` outputs. `tile(rows,
 /// cols, sums)` computes the `TI x TJ` sums of the materials `rows` by
 /// `cols`; at the matrix's edges the indices past `n - 1` repeat `n - 1`
-/// (so every tile is a full one), and only the outputs inside the lower
+/// (so every tile is a full one; each material's run lies inside `block`,
+/// asserted before `tile` runs), and only the outputs inside the lower
 /// triangle are added.
 #[inline(always)]
 pub(super) fn walk<T, const TI: usize, const TJ: usize>(
@@ -117,6 +118,12 @@ pub(super) fn walk<T, const TI: usize, const TJ: usize>(
         let rows = std::array::from_fn(|a| (i0 + a).min(n - 1));
         for j0 in (0..n.min(i0 + TI)).step_by(TJ) {
             let cols = std::array::from_fn(|b| (j0 + b).min(n - 1));
+            // The tile kernels load these runs unchecked.
+            assert!(
+                rows.iter()
+                    .chain(&cols)
+                    .all(|&m| (m + 1) * len <= block.len())
+            );
             tile(rows, cols, &mut sums);
             for (a, row) in sums.iter().enumerate() {
                 for (b, s) in row.iter().enumerate() {
@@ -138,11 +145,6 @@ fn tiles_avx512(block: &[f64], len: usize, acc: &mut [f64], triangular: bool) {
     const TJ: usize = 4;
     let split = len / LANES * LANES;
     walk::<f64, TI, TJ>(block, len, acc, |rows, cols, sums| {
-        assert!(
-            rows.iter()
-                .chain(&cols)
-                .all(|&m| (m + 1) * len <= block.len())
-        );
         let p = block.as_ptr();
         let mut l = [[_mm512_setzero_pd(); TJ]; TI];
         // Every row of the tile is at least rows[0]: below it, zeros.
@@ -153,7 +155,7 @@ fn tiles_avx512(block: &[f64], len: usize, acc: &mut [f64], triangular: bool) {
         };
         for r in (start..split).step_by(LANES) {
             // SAFETY: r + 8 <= len and the tile's runs lie inside `block`
-            // (asserted above).
+            // (asserted by `walk`).
             unsafe {
                 let x = rows.map(|i| _mm512_loadu_pd(p.add(i * len + r)));
                 for (b, j) in cols.iter().enumerate() {
@@ -208,11 +210,6 @@ fn tiles_avx2(block: &[f64], len: usize, acc: &mut [f64], triangular: bool) {
     const TJ: usize = 3;
     let split = len / LANES * LANES;
     walk::<f64, TI, TJ>(block, len, acc, |rows, cols, sums| {
-        assert!(
-            rows.iter()
-                .chain(&cols)
-                .all(|&m| (m + 1) * len <= block.len())
-        );
         let p = block.as_ptr();
         let mut lo = [[_mm256_setzero_pd(); TJ]; TI];
         let mut hi = [[_mm256_setzero_pd(); TJ]; TI];
@@ -224,7 +221,7 @@ fn tiles_avx2(block: &[f64], len: usize, acc: &mut [f64], triangular: bool) {
         };
         for r in (start..split).step_by(LANES) {
             // SAFETY: r + 8 <= len and the tile's runs lie inside `block`
-            // (asserted above).
+            // (asserted by `walk`).
             unsafe {
                 let xl = rows.map(|i| _mm256_loadu_pd(p.add(i * len + r)));
                 let xh = rows.map(|i| _mm256_loadu_pd(p.add(i * len + r + 4)));
