@@ -357,20 +357,12 @@ impl Store {
                 match self.z() {
                     Rows::F32(z) => {
                         let narrow = &mut bytemuck::cast_slice_mut::<f64, f32>(buf)[..len];
-                        for (r, row) in z[start..start + len].chunks_exact(n).enumerate() {
-                            row.iter()
-                                .enumerate()
-                                .for_each(|(i, v)| narrow[i * rows + r] = *v);
-                        }
+                        material_major(&z[start..start + len], n, narrow);
                         syrk_lower_add_f32(narrow, rows, acc);
                     }
                     Rows::F64(z) => {
                         let block = &mut buf[..len];
-                        for (r, row) in z[start..start + len].chunks_exact(n).enumerate() {
-                            row.iter()
-                                .enumerate()
-                                .for_each(|(i, v)| block[i * rows + r] = *v);
-                        }
+                        material_major(&z[start..start + len], n, block);
                         syrk_lower_add(block, rows, acc);
                     }
                 }
@@ -442,6 +434,17 @@ pub fn checksum_bytes(bytes: &[u8]) -> u64 {
         .flat_map(|h| h.to_le_bytes())
         .collect();
     xxhash_rust::xxh3::xxh3_64(&hashes)
+}
+
+/// Bin-major rows of `n` values (`rows[r * n + i]`) laid out material-major
+/// (`out[i * count + r]`, `count` rows), as the Gram kernels read them.
+fn material_major<T: Copy>(rows: &[T], n: usize, out: &mut [T]) {
+    let count = rows.len() / n;
+    for (r, row) in rows.chunks_exact(n).enumerate() {
+        for (i, v) in row.iter().enumerate() {
+            out[i * count + r] = *v;
+        }
+    }
 }
 
 #[cfg(test)]
