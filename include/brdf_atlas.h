@@ -112,6 +112,13 @@
 #define BRDF_ATLAS_BLEND_PLAUSIBLE 1
 
 /**
+ * The GP's blend with every value lifted softly onto a floor at 0.3 times
+ * a kernel-weighted average of the materials (never negative; no extra
+ * pass over the store).
+ */
+#define BRDF_ATLAS_BLEND_FLOOR 2
+
+/**
  * What a call did. Every fallible function returns one; the numbers are
  * fixed and will not change. `brdf_atlas_status_message` names a status,
  * `brdf_atlas_last_error_message` gives the full message of the last failed
@@ -532,7 +539,8 @@ enum BrdfAtlasStatus brdf_atlas_model_table_len(const struct BrdfAtlasModel *mod
 
 /**
  * Plausibility and confidence of the material at latent point (x, y) under
- * blend rule `blend` (`BRDF_ATLAS_BLEND_GP` or `BRDF_ATLAS_BLEND_PLAUSIBLE`).
+ * blend rule `blend` (`BRDF_ATLAS_BLEND_GP`, `BRDF_ATLAS_BLEND_PLAUSIBLE` or
+ * `BRDF_ATLAS_BLEND_FLOOR`).
  * Reads the whole store once (about as long as a reconstruction).
  *
  * Ownership: `model` is borrowed; `out` is caller-owned, written on success only.

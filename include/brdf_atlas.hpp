@@ -147,8 +147,8 @@ public:
     }
 
     /// The table at (x, y) under blend rule `blend` (BRDF_ATLAS_BLEND_GP,
-    /// as reconstruct(x, y), or BRDF_ATLAS_BLEND_PLAUSIBLE: one more pass
-    /// over the store).
+    /// as reconstruct(x, y); BRDF_ATLAS_BLEND_PLAUSIBLE: one more pass
+    /// over the store; BRDF_ATLAS_BLEND_FLOOR: never negative, no extra pass).
     std::vector<double> reconstruct(double x, double y, std::int32_t blend) const {
         std::vector<double> table(table_len());
         check(brdf_atlas_model_reconstruct_with(handle_, x, y, blend, table.data(), table.size(),

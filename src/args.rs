@@ -72,17 +72,18 @@ pub struct ModelPoint {
     #[arg(long, value_name = "X,Y", value_parser = point, allow_hyphen_values = true)]
     pub at: Point,
     /// How the point's weights are formed: `gp` (the GPLVM's prediction,
-    /// values clamped to >= 0) or `plausible` (the GP's weights moved towards
+    /// values clamped to >= 0), `plausible` (the GP's weights moved towards
     /// a kernel-weighted average of the materials just far enough that the
     /// clamp removes at most 0.05% of the reflectance; one more pass over the
-    /// store).
+    /// store) or `floor` (each GP value lifted softly onto a floor at 0.3
+    /// times that average's value: never clamped, no extra pass).
     #[arg(long, value_name = "RULE", default_value = "gp", value_parser = blend_rule)]
     pub blend: BlendRule,
 }
 
 /// Parse a blend rule name.
 pub(crate) fn blend_rule(text: &str) -> Result<BlendRule, String> {
-    BlendRule::parse(text).ok_or_else(|| format!("expected gp or plausible, got {text:?}"))
+    BlendRule::parse(text).ok_or_else(|| format!("expected gp, plausible or floor, got {text:?}"))
 }
 
 impl ModelPoint {

@@ -53,6 +53,7 @@ fn reconstruct_json_is_the_blend_the_library_computes() {
     for (rule, at) in [
         (BlendRule::Gp, [0.3, -0.45]),
         (BlendRule::Plausible, moving),
+        (BlendRule::Floor, moving),
     ] {
         let stdout = reconstruct(rule, at, true);
         assert_eq!(stdout.lines().count(), 1, "one record: {stdout}");
@@ -69,6 +70,26 @@ fn reconstruct_json_is_the_blend_the_library_computes() {
         // Where the rule moved the weights: towards what, and by how much in
         // each theta_h bin; the weights of every bin follow from the record.
         match blend.steps() {
+            None if rule == BlendRule::Floor => {
+                // The floor's convex weights and constants, as the library has them.
+                let moved = &rec["moved"];
+                let towards = blend.floor().expect("the floor rule's convex weights");
+                for (name, v) in model.names().iter().zip(towards) {
+                    assert_eq!(moved["towards"][name].as_f64().unwrap(), *v, "{name}");
+                }
+                assert_eq!(
+                    moved["s"].as_f64().unwrap(),
+                    brdf_atlas_core::floor::FLOOR_SHARE
+                );
+                assert_eq!(
+                    moved["d"].as_f64().unwrap(),
+                    brdf_atlas_core::floor::FLOOR_SOFTNESS
+                );
+                let p = blend.plausibility().unwrap();
+                assert_eq!(p.clamped_reflectance, 0.0, "the floor rule clamped {p:?}");
+                let stdout = reconstruct(rule, at, false);
+                assert!(stdout.contains("onto a floor at 0.3 times"), "{stdout}");
+            }
             None => assert!(rec["moved"].is_null(), "{rule:?}: {}", rec["moved"]),
             Some((towards, steps)) => {
                 let moved = &rec["moved"];
@@ -208,7 +229,7 @@ fn an_unknown_blend_rule_is_one_clear_line() {
     let (_, stderr) = texts(&out);
     assert!(!out.status.success());
     assert!(
-        stderr.contains("expected gp or plausible, got \"convex\""),
+        stderr.contains("expected gp, plausible or floor, got \"convex\""),
         "{stderr}"
     );
 }

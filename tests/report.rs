@@ -67,24 +67,29 @@ fn report_writes_every_file_and_fails_atomically() {
         assert_eq!((reader.info().width, reader.info().height), (720, 440));
     }
     // CSV tables: q = 1..3, two transforms, GPLVM, its L-BFGS twin, the
-    // convex blend, the GP's weights projected to convex ones and the
-    // plausible rule at q = 2, and PCA; for the log transform also the
+    // convex blend, the GP's weights projected to convex ones, the
+    // plausible rule and the soft floor at q = 2, and PCA; for the log transform also the
     // learned kernel's GP, convex blend and plausible rule.
     let loo = std::fs::read_to_string(rep.join("loo.csv")).unwrap();
     assert_eq!(
         loo.lines().count(),
-        1 + 2 * (3 + 1 + 1 + 1 + 1 + 3) + 3,
+        1 + 2 * (3 + 1 + 1 + 1 + 1 + 1 + 3) + 3,
         "{loo}"
     );
     for t in ["log", "raw"] {
         assert!(
-            loo.contains(&format!("{t},gplvm-projected,2,")),
+            loo.contains(&format!("{t},gplvm-projected,2,"))
+                && loo.contains(&format!("{t},gplvm-floor,2,")),
             "{t}: {loo}"
         );
     }
     assert!(
         md.contains("projected to the nearest convex ones"),
         "report.md lacks the projected weights' line"
+    );
+    assert!(
+        md.contains("lifted softly onto a floor"),
+        "report.md lacks the soft floor's line"
     );
     for method in ["gplvm-learned", "convex-learned", "gplvm-learned-plausible"] {
         assert!(loo.contains(&format!("log,{method},2,")), "{method}: {loo}");
@@ -97,7 +102,7 @@ fn report_writes_every_file_and_fails_atomically() {
         }
     }
     let per = std::fs::read_to_string(rep.join("loo-materials.csv")).unwrap();
-    assert_eq!(per.lines().count(), 1 + (2 * 10 + 3) * 6);
+    assert_eq!(per.lines().count(), 1 + (2 * 11 + 3) * 6);
     // Plausibility: a 3 x 3 grid, three models (log with the fixed and the
     // learned kernel, raw), two rules; the plausible rule never clamps more
     // than the GP at the same point.

@@ -16,9 +16,11 @@ Properties:
 - or ``filename`` (string): a MERL ``.binary`` file, evaluated directly
   (the same nearest-bin lookup);
 - ``blend`` (string, optional, with ``model``): ``"gp"`` (default: the
-  GP's weights) or ``"plausible"`` (the plausible rule's, which keeps the
+  GP's weights), ``"plausible"`` (the plausible rule's, which keeps the
   material non-negative and its albedo at most 1; one pass over the model's
-  store when the scene loads, none per ray);
+  store when the scene loads, none per ray) or ``"floor"`` (the GP's values
+  lifted softly onto a floor under the convex blend's: never negative, no
+  pass over the store);
 - ``sampling`` (string, optional): ``"tabulated"`` (default: a table of
   the material's own lobe mixed with 10% cosine sampling) or ``"cosine"``.
 

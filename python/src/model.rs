@@ -68,11 +68,11 @@ impl PyModel {
     }
 }
 
-/// The blend rule named `blend`: "gp" or "plausible".
+/// The blend rule named `blend`: "gp", "plausible" or "floor".
 fn rule_of(blend: &str) -> PyResult<BlendRule> {
     Ok(BlendRule::parse(blend).ok_or_else(|| {
         Failure::input(format!(
-            "blend rule {blend:?}: expected \"gp\" or \"plausible\""
+            "blend rule {blend:?}: expected \"gp\", \"plausible\" or \"floor\""
         ))
     })?)
 }
@@ -186,7 +186,7 @@ impl PyModel {
     }
 
     /// How physical the material at `x` is, under blend rule `blend`
-    /// ("gp", the default, or "plausible"): a dict with
+    /// ("gp", the default, "plausible" or "floor"): a dict with
     /// `clamped_reflectance` (share of the cosine-weighted reflectance the
     /// clamp to >= 0 removes), `clamped_values`, `max_albedo` (largest
     /// directional albedo; at most 1 for a physical material),
@@ -216,8 +216,9 @@ impl PyModel {
 
     /// The material at `x`, for repeated queries (it remembers the bins it
     /// has reconstructed) and sampling. `blend`: "gp" (the GP's weights,
-    /// the default) or "plausible" (the plausible rule's: one pass over the
-    /// store when the material is made, none per query).
+    /// the default), "plausible" (the plausible rule's: one pass over the
+    /// store when the material is made, none per query) or "floor" (the GP's
+    /// values lifted softly onto a floor under the convex blend's: no pass).
     #[pyo3(signature = (x, blend = "gp"))]
     fn material(&self, py: Python<'_>, x: &Bound<'_, PyAny>, blend: &str) -> PyResult<PyMaterial> {
         let (x, rule) = (point(x)?, rule_of(blend)?);

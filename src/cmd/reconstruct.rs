@@ -84,6 +84,14 @@ pub fn write(
             moved.iter().copied().fold(0.0, f64::max)
         )?;
     }
+    if blend.floor().is_some() {
+        writeln!(
+            report,
+            "  (the GP's weights: the {} rule lifts each value softly onto a floor at {} times a convex blend's)",
+            rule.name(),
+            brdf_atlas_core::floor::FLOOR_SHARE
+        )?;
+    }
     let plausibility = blend.plausibility()?;
     let confidence = blend.confidence();
     writeln!(
@@ -171,6 +179,17 @@ pub fn record(
             "rule": "in theta_h bin b the weights are w + t_b (towards - w), w the weights above",
             "towards": by_name(towards),
             "theta_h_steps": steps,
+        })
+    });
+    let moved = moved.or_else(|| {
+        blend.floor().map(|towards| {
+            json!({
+                "rule": "each value is c h(g / c), g its value under the weights above, c under towards, \
+                         h(r) = s + d ln(1 + e^((r - s) / d))",
+                "towards": by_name(towards),
+                "s": brdf_atlas_core::floor::FLOOR_SHARE,
+                "d": brdf_atlas_core::floor::FLOOR_SOFTNESS,
+            })
         })
     });
     let transform = model.file().transform;

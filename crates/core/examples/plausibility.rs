@@ -82,9 +82,16 @@ fn leave_one_out(model: &Model) -> Result<(), Box<dyn std::error::Error>> {
             mixes.push(loo::Mix {
                 from: 0,
                 towards: predictors.len(),
-                steps,
+                how: loo::Mixing::Steps(steps),
             });
         }
+        mix_names.push(format!("soft floor under convex l={lc:.3}"));
+        mix_moved.push(0);
+        mixes.push(loo::Mix {
+            from: 0,
+            towards: predictors.len(),
+            how: loo::Mixing::Floor,
+        });
         predictors.push(convex);
         names.push(format!("convex l={lc:.3}"));
         moved.push(0);

@@ -57,7 +57,7 @@ pub use query::{
     LOW_CONFIDENCE_VARIANCE, Located, Plausibility, Segment, View, contour_levels, contours,
     luminance,
 };
-pub use query::{field, render, sheet, swatch};
+pub use query::{field, floor, render, sheet, swatch};
 pub use simd::fastlog;
 
 // The unit tests run under the counting allocator, so `heap` is tested as a

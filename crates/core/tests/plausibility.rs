@@ -354,7 +354,7 @@ fn hard_cases_stay_finite() {
         fit_dir(dir, &model, &options, &NoProgress).unwrap();
         let m = Model::open(&model).unwrap();
         for x in [[0.0, 0.0], [0.9, -0.9], [30.0, 30.0]] {
-            for rule in [BlendRule::Gp, BlendRule::Plausible] {
+            for rule in [BlendRule::Gp, BlendRule::Plausible, BlendRule::Floor] {
                 let b = m.at_with(&x[..q], rule).unwrap();
                 let (p, c) = (b.plausibility().unwrap(), b.confidence());
                 assert!(

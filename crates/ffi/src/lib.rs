@@ -63,7 +63,7 @@ pub use model::{
     brdf_atlas_model_view,
 };
 pub use plausibility::{
-    BRDF_ATLAS_BLEND_GP, BRDF_ATLAS_BLEND_PLAUSIBLE, BrdfAtlasPlausibility,
+    BRDF_ATLAS_BLEND_FLOOR, BRDF_ATLAS_BLEND_GP, BRDF_ATLAS_BLEND_PLAUSIBLE, BrdfAtlasPlausibility,
     brdf_atlas_model_confidence, brdf_atlas_model_plausibility, brdf_atlas_model_reconstruct_with,
 };
 pub use query::{

@@ -16,6 +16,10 @@ pub const BRDF_ATLAS_BLEND_GP: i32 = 0;
 /// everywhere far enough that no directional albedo exceeds 1 (one more
 /// pass over the store).
 pub const BRDF_ATLAS_BLEND_PLAUSIBLE: i32 = 1;
+/// The GP's blend with every value lifted softly onto a floor at 0.3 times
+/// a kernel-weighted average of the materials (never negative; no extra
+/// pass over the store).
+pub const BRDF_ATLAS_BLEND_FLOOR: i32 = 2;
 
 /// What the model knows at a latent point and how physical its material is.
 #[repr(C)]
@@ -47,14 +51,17 @@ fn rule(value: i32) -> Result<BlendRule> {
     match value {
         BRDF_ATLAS_BLEND_GP => Ok(BlendRule::Gp),
         BRDF_ATLAS_BLEND_PLAUSIBLE => Ok(BlendRule::Plausible),
+        BRDF_ATLAS_BLEND_FLOOR => Ok(BlendRule::Floor),
         v => Err(Failure::invalid(format!(
-            "blend rule {v}: expected BRDF_ATLAS_BLEND_GP (0) or BRDF_ATLAS_BLEND_PLAUSIBLE (1)"
+            "blend rule {v}: expected BRDF_ATLAS_BLEND_GP (0), BRDF_ATLAS_BLEND_PLAUSIBLE (1) \
+             or BRDF_ATLAS_BLEND_FLOOR (2)"
         ))),
     }
 }
 
 /// Plausibility and confidence of the material at latent point (x, y) under
-/// blend rule `blend` (`BRDF_ATLAS_BLEND_GP` or `BRDF_ATLAS_BLEND_PLAUSIBLE`).
+/// blend rule `blend` (`BRDF_ATLAS_BLEND_GP`, `BRDF_ATLAS_BLEND_PLAUSIBLE` or
+/// `BRDF_ATLAS_BLEND_FLOOR`).
 /// Reads the whole store once (about as long as a reconstruction).
 ///
 /// Ownership: `model` is borrowed; `out` is caller-owned, written on success only.

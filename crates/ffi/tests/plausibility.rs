@@ -39,6 +39,7 @@ fn plausibility_confidence_and_rules_are_the_core_library_s() {
         for (rule, c_rule) in [
             (BlendRule::Gp, BRDF_ATLAS_BLEND_GP),
             (BlendRule::Plausible, BRDF_ATLAS_BLEND_PLAUSIBLE),
+            (BlendRule::Floor, BRDF_ATLAS_BLEND_FLOOR),
         ] {
             let blend = model.at_with(&[x, y], rule).unwrap();
             let (p, c) = (blend.plausibility().unwrap(), blend.confidence());

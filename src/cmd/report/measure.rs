@@ -352,9 +352,18 @@ fn per_transform(
         mixes.push(loo::Mix {
             from: *at,
             towards: predictors.len() - 1,
-            steps: banded.remove(0),
+            how: loo::Mixing::Steps(banded.remove(0)),
         });
         mix_labels.push((label, 2));
+        // The soft floor under the same convex blend (fixed kernel only).
+        if label == "gplvm-plausible" {
+            mixes.push(loo::Mix {
+                from: *at,
+                towards: predictors.len() - 1,
+                how: loo::Mixing::Floor,
+            });
+            mix_labels.push(("gplvm-floor", 2));
+        }
     }
     // The fixed kernel's GP weights constrained instead of adapted: the
     // nearest convex weights (nothing clamped, at a cost in accuracy).

@@ -137,6 +137,19 @@ pub fn markdown(w: &mut dyn Write, r: &Results) -> io::Result<()> {
     }
     for t in [TransformKind::Log, TransformKind::Raw] {
         let base = r.loo_row(t, r.kept_label, 2);
+        if let (Some(base), Some(fl)) = (base, r.loo_row(t, "gplvm-floor", 2)) {
+            writeln!(
+                w,
+                "Leave-one-out, {} transform, q = 2, fixed kernel, the GP's values lifted \
+                 softly onto a floor at {} times the convex blend's (never clamped, and a \
+                 function of the point's weights only): log RMSE {:.5} ({:+.1}% against the \
+                 GP's weights).\n",
+                t.name(),
+                brdf_atlas_core::floor::FLOOR_SHARE,
+                fl.log,
+                100.0 * (fl.log / base.log - 1.0),
+            )?;
+        }
         if let (Some(base), Some(pr)) = (base, r.loo_row(t, "gplvm-projected", 2)) {
             writeln!(
                 w,

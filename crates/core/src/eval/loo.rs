@@ -39,6 +39,7 @@ use crate::data::store::{Rows, Store};
 use crate::data::transform::{InverseForm, Transform, TransformKind};
 use crate::error::{ParamError, Result};
 use crate::progress::Progress;
+use crate::query::floor::soft_floor;
 use crate::simd::fastlog::log1p;
 use crate::simd::fold::{GROUPS, ordered_blocks_then};
 
@@ -121,17 +122,27 @@ pub fn evaluate(
 }
 
 /// A predictor mixed row by row from two of [`evaluate_mixed`]'s matrix
-/// predictors: material `i` in `theta_h` bin `b` is predicted by
-/// `(1 - t) P_from + t P_towards`, `t = steps[b * N + i]` (see
-/// [`banded_steps`]).
+/// predictors, `P_from` and `P_towards`, as [`Mix::how`] says.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Mix {
-    /// Index of the predictor at `t = 0`.
+    /// Index of the predictor at `t = 0` (the GP's, for the rules).
     pub from: usize,
-    /// Index of the predictor at `t = 1`.
+    /// Index of the predictor at `t = 1` (the convex blend's).
     pub towards: usize,
-    /// The steps, `theta_h` bin by bin, `N` per bin.
-    pub steps: Vec<f64>,
+    /// How the two are mixed.
+    pub how: Mixing,
+}
+
+/// How a [`Mix`] forms each prediction from its two predictors'.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Mixing {
+    /// Material `i` in `theta_h` bin `b` is predicted by
+    /// `(1 - t) P_from + t P_towards`, `t = steps[b * N + i]` (see
+    /// [`banded_steps`]): [`crate::BlendRule::Plausible`].
+    Steps(Vec<f64>),
+    /// Each value is [`crate::floor::soft_floor`] of the two predictors'
+    /// values (with the mean added): [`crate::BlendRule::Floor`].
+    Floor,
 }
 
 /// [`evaluate`] with mixed predictors after the matrix ones: the errors
@@ -153,12 +164,16 @@ pub fn evaluate_mixed(
         .into());
     }
     let theta_h = store.dims().theta_h;
+    let steps_len = |m: &Mix| match &m.how {
+        Mixing::Steps(steps) => steps.len(),
+        Mixing::Floor => theta_h * n,
+    };
     if let Some(m) = mixes
         .iter()
-        .find(|m| m.from >= count || m.towards >= count || m.steps.len() != theta_h * n)
+        .find(|m| m.from >= count || m.towards >= count || steps_len(m) != theta_h * n)
     {
         return Err(ParamError::PredictorShape {
-            rows: m.steps.len(),
+            rows: steps_len(m),
             cols: m.from.max(m.towards),
             n,
         }
@@ -242,11 +257,27 @@ pub fn evaluate_mixed(
                         &mut g.mixed[k * mt..(k + 1) * mt],
                     );
                     dst[..mn].copy_from_slice(src);
+                    let mean = scoring.mean[r0 + k];
                     for (m, mix) in mixes.iter().enumerate() {
-                        let steps = &mix.steps[band * n..(band + 1) * n];
-                        for i in 0..n {
-                            let (a, b) = (src[mix.from * n + i], src[mix.towards * n + i]);
-                            dst[mn + m * n + i] = a + steps[i] * (b - a);
+                        let (from, towards) = (
+                            &src[mix.from * n..(mix.from + 1) * n],
+                            &src[mix.towards * n..(mix.towards + 1) * n],
+                        );
+                        let out = &mut dst[mn + m * n..mn + (m + 1) * n];
+                        match &mix.how {
+                            Mixing::Steps(steps) => {
+                                let steps = &steps[band * n..(band + 1) * n];
+                                for (((o, &a), &b), &t) in
+                                    out.iter_mut().zip(from).zip(towards).zip(steps)
+                                {
+                                    *o = a + t * (b - a);
+                                }
+                            }
+                            Mixing::Floor => {
+                                for ((o, &a), &b) in out.iter_mut().zip(from).zip(towards) {
+                                    *o = soft_floor(mean + a, mean + b) - mean;
+                                }
+                            }
                         }
                     }
                 }

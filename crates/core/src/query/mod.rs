@@ -7,6 +7,7 @@ pub mod contour;
 mod decor;
 mod exact;
 pub mod field;
+pub mod floor;
 mod labels;
 pub mod locate;
 pub mod map;

@@ -23,6 +23,7 @@ use serde::Serialize;
 use crate::data::transform::InverseForm;
 use crate::error::Result;
 use crate::model::Model;
+use crate::query::budget::convex_weights;
 use crate::query::reconstruct::Blend;
 
 /// Rows a worker handles at once (fixed, so sums do not depend on the thread count).
@@ -56,6 +57,15 @@ pub enum BlendRule {
     /// a mean of the materials, so it reflects no more than they do). Costs
     /// one extra pass over the store per latent point.
     Plausible,
+    /// The GP's blend, each value lifted onto a soft floor under the convex
+    /// blend's (the convex weights `v` of [`BlendRule::Plausible`]): a row
+    /// with GP value `g` and convex value `c` becomes
+    /// `c h(g / c)`, `h` a smooth maximum of `g / c` and
+    /// [`crate::query::floor::FLOOR_SHARE`] ([`crate::query::floor`]). No
+    /// value is ever clamped, values well above the floor keep the GP's,
+    /// and each value depends on the point's two weight vectors alone: no
+    /// pass over the store, and the material varies smoothly over the map.
+    Floor,
 }
 
 impl BlendRule {
@@ -64,12 +74,13 @@ impl BlendRule {
         match self {
             BlendRule::Gp => "gp",
             BlendRule::Plausible => "plausible",
+            BlendRule::Floor => "floor",
         }
     }
 
     /// Parse a [`BlendRule::name`].
     pub fn parse(s: &str) -> Option<BlendRule> {
-        [BlendRule::Gp, BlendRule::Plausible]
+        [BlendRule::Gp, BlendRule::Plausible, BlendRule::Floor]
             .into_iter()
             .find(|r| r.name() == s)
     }
@@ -125,6 +136,12 @@ impl Model {
             BlendRule::Plausible => {
                 let mut blends = self.plausible_blends(&[x.to_vec()])?;
                 Ok(blends.pop().expect("one blend a point"))
+            }
+            BlendRule::Floor => {
+                let gp = self.at(x)?;
+                let latent = crate::gplvm::kernel::rows_of(self.latent().as_ref());
+                let l = self.file().kernel.length_scale;
+                Ok(gp.with_floor(convex_weights(&latent, x, l, None)))
             }
         }
     }

@@ -31,6 +31,7 @@ use rayon::prelude::*;
 use crate::data::store::Rows;
 use crate::error::Result;
 use crate::model::Model;
+use crate::query::floor::soft_floor;
 use crate::simd::dot;
 
 /// One latent point of a model, ready to answer queries.
@@ -45,6 +46,9 @@ pub struct Blend<'m> {
     weights: Vec<f64>,
     /// Weights per `theta_h` bin, where a [`crate::query::BlendRule`] moved them.
     bands: Option<Box<Bands>>,
+    /// The convex weights `v`, where [`crate::query::BlendRule::Floor`]
+    /// lifts every value onto its soft floor ([`crate::query::floor`]).
+    floor: Option<Box<[f64]>>,
     /// `value(channel, bin)` of every row asked so far (see [`Memo`]).
     memo: OnceLock<Box<[AtomicU64]>>,
 }
@@ -149,6 +153,7 @@ impl Model {
             gp: weights.clone(),
             weights,
             bands: None,
+            floor: None,
             memo: OnceLock::new(),
         })
     }
@@ -162,6 +167,7 @@ impl Model {
             gp: weights.to_vec(),
             weights: weights.to_vec(),
             bands: None,
+            floor: None,
             memo: OnceLock::new(),
         }
     }
@@ -231,25 +237,76 @@ impl<'m> Blend<'m> {
             gp: self.gp.clone(),
             weights: self.weights.clone(),
             bands: Some(Box::new(bands)),
+            floor: None,
             memo: OnceLock::new(),
         }
     }
 
-    /// The reconstruction of store row `row` in transformed space, `mean + w . z`.
+    /// The same point with every value lifted onto the soft floor under the
+    /// blend of the convex weights `convex` (and a fresh memo).
+    pub(crate) fn with_floor(&self, convex: Vec<f64>) -> Blend<'m> {
+        Blend {
+            model: self.model,
+            x: self.x.clone(),
+            kernel: self.kernel.clone(),
+            gp: self.gp.clone(),
+            weights: self.weights.clone(),
+            bands: None,
+            floor: Some(convex.into_boxed_slice()),
+            memo: OnceLock::new(),
+        }
+    }
+
+    /// Where [`crate::query::BlendRule::Floor`] formed the blend: the convex
+    /// weights `v` whose blend sets each value's floor.
+    pub fn floor(&self) -> Option<&[f64]> {
+        self.floor.as_deref()
+    }
+
+    /// The reconstruction of store row `row` in transformed space, `mean + w . z`
+    /// (lifted onto its soft floor under [`crate::query::BlendRule::Floor`]).
     #[inline]
     pub fn transformed(&self, row: usize) -> f64 {
         let store = self.model.store();
         let n = store.n();
-        let w = self.weights_of_row(row, self.model.dims().bins());
-        let z = match store.z() {
-            Rows::F32(z) => dot::dot(w, &z[row * n..(row + 1) * n]),
-            Rows::F64(z) => dot::dot(w, &z[row * n..(row + 1) * n]),
+        let blend = |w: &[f64]| {
+            let z = match store.z() {
+                Rows::F32(z) => dot::dot(w, &z[row * n..(row + 1) * n]),
+                Rows::F64(z) => dot::dot(w, &z[row * n..(row + 1) * n]),
+            };
+            store.mean()[row] + z
         };
-        store.mean()[row] + z
+        let g = blend(self.weights_of_row(row, self.model.dims().bins()));
+        match &self.floor {
+            Some(v) => soft_floor(g, blend(v)),
+            None => g,
+        }
     }
 
     /// [`Blend::transformed`] for rows `r0 .. r0 + out.len()`.
     pub fn transformed_rows(&self, r0: usize, out: &mut [f64]) {
+        self.blended_rows(r0, out);
+        if let Some(v) = &self.floor {
+            let store = self.model.store();
+            let n = store.n();
+            // The convex blend a run at a time, on the stack.
+            let mut convex = [0.0f64; 256];
+            for (k, out) in out.chunks_mut(convex.len()).enumerate() {
+                let r = r0 + k * convex.len();
+                let (mean, c) = (&store.mean()[r..], &mut convex[..out.len()]);
+                match store.z() {
+                    Rows::F32(z) => dot::rows(v, &z[r * n..], mean, c),
+                    Rows::F64(z) => dot::rows(v, &z[r * n..], mean, c),
+                }
+                for (o, &c) in out.iter_mut().zip(c.iter()) {
+                    *o = soft_floor(*o, c);
+                }
+            }
+        }
+    }
+
+    /// `mean + w . z` of rows `r0 .. r0 + out.len()`, with each row's weights.
+    fn blended_rows(&self, r0: usize, out: &mut [f64]) {
         let store = self.model.store();
         let n = store.n();
         let (bins, end) = (self.model.dims().bins(), r0 + out.len());

@@ -52,9 +52,9 @@ pub fn swatches(
     rule: BlendRule,
 ) -> Result<Vec<Swatch>> {
     let blends = match rule {
-        BlendRule::Gp => points
+        BlendRule::Gp | BlendRule::Floor => points
             .iter()
-            .map(|p| model.at(p))
+            .map(|p| model.at_with(p, rule))
             .collect::<Result<Vec<_>>>()?,
         BlendRule::Plausible => {
             model.plausible_blends(&points.iter().map(|p| p.to_vec()).collect::<Vec<_>>())?

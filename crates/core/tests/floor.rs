@@ -1,0 +1,214 @@
+//! The soft-floor blend rule (`BlendRule::Floor`) against a dense
+//! recomputation from the stored rows: its values, its plausibility, and
+//! its held-out errors.
+
+use std::path::{Path, PathBuf};
+
+use brdf_atlas_core::floor::{FLOOR_SHARE, FLOOR_SOFTNESS};
+use brdf_atlas_core::loo::{self, CONVEX_LENGTH_RATIO};
+use brdf_atlas_core::{BlendRule, FitOptions, GplvmParams, Model, NoProgress, Precision};
+use brdf_atlas_core::{TransformKind, fit_dir};
+use brdf_merl::{Dims, synth};
+
+const DIMS: Dims = Dims {
+    theta_h: 12,
+    theta_d: 12,
+    phi_d: 24,
+};
+
+fn fit(dir: &Path, count: usize, transform: TransformKind) -> PathBuf {
+    let data = dir.join(format!("data-{count}"));
+    if !data.exists() {
+        synth::write_dir(&data, count, DIMS, 5).unwrap();
+    }
+    let model = dir.join(format!("{}-{count}.atlas", transform.name()));
+    let options = FitOptions {
+        params: GplvmParams::new(2).check().unwrap(),
+        transform,
+        precision: Precision::F64,
+    };
+    fit_dir(&data, &model, &options, &NoProgress).unwrap();
+    model
+}
+
+/// Points where the GP blend of the small synthetic models overshoots.
+const POINTS: [[f64; 2]; 5] = [
+    [0.31, -0.42],
+    [-0.9, 0.8],
+    [1.05, 1.05],
+    [-1.1, -0.2],
+    [0.0, 0.0],
+];
+
+/// The rule written out: `c (s + d ln(1 + e^((g / c - s) / d)))`.
+fn floor(g: f64, c: f64) -> f64 {
+    if c <= 0.0 {
+        return g.max(0.0);
+    }
+    let u = (g / c - FLOOR_SHARE) / FLOOR_SOFTNESS;
+    // ln(1 + e^u), written as u + ln(1 + e^-u) where e^u would overflow.
+    let softplus = if u < 30.0 {
+        (1.0 + u.exp()).ln()
+    } else {
+        u + (-u).exp().ln_1p()
+    };
+    c * (FLOOR_SHARE + FLOOR_SOFTNESS * softplus)
+}
+
+/// The convex weights at `x`: Gaussians of width `CONVEX_LENGTH_RATIO l`, normalised.
+fn convex(m: &Model, x: &[f64; 2]) -> Vec<f64> {
+    let l = m.file().kernel.length_scale * CONVEX_LENGTH_RATIO;
+    let lat = m.latent();
+    let k: Vec<f64> = (0..lat.nrows())
+        .map(|i| {
+            let d2 = (lat[(i, 0)] - x[0]).powi(2) + (lat[(i, 1)] - x[1]).powi(2);
+            (-d2 / (2.0 * l * l)).exp()
+        })
+        .collect();
+    let sum: f64 = k.iter().sum();
+    k.iter().map(|v| v / sum).collect()
+}
+
+/// A value in transformed space back to reflectance, before any clamp.
+fn inverse(kind: TransformKind, bin: usize, v: f64) -> f64 {
+    let (ci, co) = DIMS.angles_of(bin).cosines();
+    let c = (ci * co).max(0.0);
+    match kind {
+        TransformKind::Raw => v,
+        TransformKind::Log if c < 1e-6 => 0.0,
+        TransformKind::Log => v.exp_m1() / c,
+    }
+}
+
+#[test]
+fn values_equal_a_dense_recomputation_and_are_never_clamped() {
+    let tmp = tempfile::tempdir().unwrap();
+    for transform in [TransformKind::Raw, TransformKind::Log] {
+        let m = Model::open(fit(tmp.path(), 12, transform)).unwrap();
+        let store = m.store();
+        let (n, bins) = (store.n(), DIMS.bins());
+        let mut z = vec![0.0; n];
+        let (mut gp_clamped, mut lifted, mut kept) = (0, 0, 0);
+        for x in POINTS {
+            let gp = m.at(&x).unwrap();
+            let b = m.at_with(&x, BlendRule::Floor).unwrap();
+            let v = convex(&m, &x);
+            let got_v = b
+                .floor()
+                .expect("the floor rule records its convex weights");
+            for (a, w) in got_v.iter().zip(&v) {
+                assert!((a - w).abs() <= 1e-12, "{x:?}: convex {got_v:?} vs {v:?}");
+            }
+            let table = b.table().unwrap();
+            for row in 0..store.rows() {
+                if store.unmeasured()[row] != 0 {
+                    continue;
+                }
+                store.copy_rows(row, &mut z);
+                let blend = |w: &[f64]| {
+                    store.mean()[row] + w.iter().zip(&z).map(|(a, b)| a * b).sum::<f64>()
+                };
+                let (g, c) = (blend(gp.gp_weights()), blend(&v));
+                let want = floor(g, c);
+                let (ch, bin) = (row / bins, row % bins);
+                let tol = 1e-9 * want.abs().max(1e-9);
+                assert!(
+                    (b.transformed(row) - want).abs() <= tol,
+                    "{transform:?} {x:?} row {row}: {} vs {want}",
+                    b.transformed(row)
+                );
+                let f = inverse(transform, bin, want);
+                assert!(f >= 0.0, "{transform:?} {x:?} row {row}: {f}");
+                let value = b.value(ch, bin).unwrap();
+                assert!(
+                    (value - f).abs() <= 1e-9 * f.abs().max(1e-9),
+                    "{value} vs {f}"
+                );
+                let from_table = table.value(ch, bin).unwrap();
+                assert!(
+                    (from_table - f).abs() <= 1e-6 * f.abs().max(1e-6),
+                    "{from_table} vs {f}"
+                );
+                gp_clamped += usize::from(g < 0.0);
+                if c <= 0.0 {
+                    // No material reflects anything here: the GP's value, clamped.
+                    assert_eq!(want, g.max(0.0));
+                } else if g < FLOOR_SHARE * c {
+                    lifted += 1;
+                    assert!(want >= FLOOR_SHARE * c);
+                } else {
+                    // Above the floor a value moves up by at most
+                    // c d e^-u, u = (g / c - s) / d: the GP's is kept.
+                    let u = (g / c - FLOOR_SHARE) / FLOOR_SOFTNESS;
+                    let bound = c * FLOOR_SOFTNESS * (-u).exp();
+                    assert!(
+                        want >= g - 1e-14 * g.abs() && want - g <= bound * (1.0 + 1e-9) + 1e-14 * g,
+                        "{g} moved to {want}, c {c} u {u}"
+                    );
+                    kept += usize::from(u > 5.0);
+                }
+            }
+            let p = b.plausibility().unwrap();
+            assert_eq!(p.clamped_reflectance, 0.0, "{transform:?} {x:?}: {p:?}");
+            assert_eq!(p.clamped_values, 0.0, "{transform:?} {x:?}: {p:?}");
+        }
+        assert!(
+            gp_clamped > 0,
+            "{transform:?}: the GP never goes negative here"
+        );
+        assert!(
+            lifted > 0 && kept > 0,
+            "{transform:?}: lifted {lifted}, kept {kept}"
+        );
+    }
+}
+
+#[test]
+fn held_out_errors_equal_a_dense_recomputation() {
+    let tmp = tempfile::tempdir().unwrap();
+    let m = Model::open(fit(tmp.path(), 10, TransformKind::Log)).unwrap();
+    let (kernel, latent) = (m.file().kernel, m.latent().as_ref());
+    let gp = loo::gp_predictor(&kernel, latent, true).unwrap();
+    let cv = loo::convex_predictor(&kernel, latent).unwrap();
+    let mix = loo::Mix {
+        from: 0,
+        towards: 1,
+        how: loo::Mixing::Floor,
+    };
+    let ev =
+        loo::evaluate_mixed(m.store(), &[gp.clone(), cv.clone()], &[mix], &NoProgress).unwrap();
+    let store = m.store();
+    let (n, bins) = (store.n(), DIMS.bins());
+    let mut z = vec![0.0; n];
+    let mut sums = vec![0.0; n];
+    let mut scored = 0;
+    for row in 0..store.rows() {
+        let bin = row % bins;
+        let (ci, co) = DIMS.angles_of(bin).cosines();
+        if store.unmeasured()[row] != 0 || (ci * co).max(0.0) < 1e-6 {
+            continue;
+        }
+        scored += 1;
+        store.copy_rows(row, &mut z);
+        let mean = store.mean()[row];
+        for (i, s) in sums.iter_mut().enumerate() {
+            let predict = |p: &faer::Mat<f64>| mean + (0..n).map(|j| p[(i, j)] * z[j]).sum::<f64>();
+            let y = floor(predict(&gp), predict(&cv));
+            // ln(1 + f c) of the log transform's value is the value itself.
+            let d = y.max(0.0) - (mean + z[i]).max(0.0);
+            *s += d * d;
+        }
+    }
+    assert_eq!(ev.scored_rows, scored);
+    let got = &ev.errors[2].log;
+    for i in 0..n {
+        assert!(
+            (got[i] - sums[i]).abs() <= 1e-9 * sums[i].max(1e-12),
+            "material {i}: {} vs {}",
+            got[i],
+            sums[i]
+        );
+    }
+    // The floor moved some held-out predictions: it is not the GP's.
+    assert!((0..n).any(|i| (got[i] - ev.errors[0].log[i]).abs() > 1e-9 * got[i]));
+}
