@@ -159,7 +159,7 @@ def test_albedo_map(request, which):
         assert np.allclose(one[0, 0], rho, rtol=rtol), (name, one[0, 0])
 
 
-@pytest.mark.parametrize("blend", ["gp", "plausible"])
+@pytest.mark.parametrize("blend", ["gp", "plausible", "floor"])
 def test_plausibility_and_confidence_equal_the_cli_record(log_model, cli, tmp_path, blend):
     x = [0.9, -0.95]
     out = subprocess.run([str(cli), "reconstruct", str(log_model.path), "--at", f"{x[0]!r},{x[1]!r}",
@@ -171,6 +171,9 @@ def test_plausibility_and_confidence_equal_the_cli_record(log_model, cli, tmp_pa
     for key in ["clamped_reflectance", "clamped_values", "max_albedo", "max_albedo_incidence"]:
         assert p[key] == rec["plausibility"][key], key
     assert p["plausible"] == rec["plausible"]
+    if blend == "floor":
+        # The soft floor never lets a value below zero.
+        assert p["clamped_reflectance"] == 0.0 and p["clamped_values"] == 0.0
     c = log_model.confidence(x)
     assert c["variance"] == rec["confidence"]["variance"]
     # Far from every material the model knows nothing, and says so.

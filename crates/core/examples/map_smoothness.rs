@@ -26,25 +26,24 @@ fn albedos(model: &Model, x: [f64; 2]) -> Result<[[f64; 3]; 3], Box<dyn std::err
         blend.transformed_rows(0, &mut values);
         for (&b, &w) in rule.bins().iter().zip(rule.weights()) {
             let b = b as usize;
-            for c in 0..3 {
-                let row = c * bins + b;
+            // The inverse transform before its clamp (TransformKind::formula).
+            let (ci, co) = model.dims().angles_of(b).cosines();
+            let cc = (ci * co).max(0.0);
+            let inverse = |t: f64| match (log, cc < 1e-6) {
+                (false, _) => t,
+                (true, true) => 0.0,
+                (true, false) => t.exp_m1() / cc,
+            };
+            let channels = (0..3).map(|c| c * bins + b);
+            for (c, row) in channels.enumerate() {
                 if store.unmeasured()[row] != 0 {
                     continue;
                 }
-                let t = values[row];
-                // The inverse transform before its clamp (TransformKind::formula).
-                let (ci, co) = model.dims().angles_of(b).cosines();
-                let cc = (ci * co).max(0.0);
-                let f = match (log, cc < 1e-6) {
-                    (false, _) => t,
-                    (true, true) => 0.0,
-                    (true, false) => t.exp_m1() / cc,
-                };
-                if k == 0 {
-                    out[0][c] += w * f.max(0.0);
-                    out[1][c] += w * f;
-                } else {
-                    out[2][c] += w * f.max(0.0);
+                let f = inverse(values[row]);
+                let (clamped, unclamped) = if k == 0 { (0, Some(1)) } else { (2, None) };
+                out[clamped][c] += w * f.max(0.0);
+                if let Some(u) = unclamped {
+                    out[u][c] += w * f;
                 }
             }
         }
