@@ -233,3 +233,57 @@ fn an_unknown_blend_rule_is_one_clear_line() {
         "{stderr}"
     );
 }
+
+#[test]
+fn a_map_of_the_floor_rule_says_so_and_the_plausible_rule_has_none() {
+    let tmp = tempfile::tempdir().unwrap();
+    let model_path = fitted(tmp.path());
+    let model = Model::open(&model_path).unwrap();
+    let map = |blend: &str, png: &str| {
+        brdf_atlas([
+            "map",
+            model_path.to_str().unwrap(),
+            "--size",
+            "48",
+            "--blend",
+            blend,
+            "-o",
+            tmp.path().join(png).to_str().unwrap(),
+        ])
+    };
+    let out = map("floor", "floor.png");
+    let (stdout, stderr) = texts(&out);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stdout.contains("(floor blend)"), "{stdout}");
+    let sidecar: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(tmp.path().join("floor.json")).unwrap())
+            .unwrap();
+    assert_eq!(sidecar["blend"], "floor");
+    // The map's pixels are the library's map of the floor rule.
+    let want = model
+        .albedo_map_with(
+            48,
+            48,
+            brdf_atlas_core::View::default(),
+            None,
+            BlendRule::Floor,
+            &brdf_atlas_core::NoProgress,
+        )
+        .unwrap();
+    assert_eq!(
+        serde_json::to_value(want.method).unwrap(),
+        sidecar["method"],
+        "{sidecar}"
+    );
+    // The plausible rule: one line naming it, no picture.
+    let out = map("plausible", "plausible.png");
+    let (_, stderr) = texts(&out);
+    assert!(!out.status.success());
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("plausible rule's albedo has no map"),
+        "{stderr}"
+    );
+    assert!(!tmp.path().join("plausible.png").exists());
+    assert!(!tmp.path().join("plausible.json").exists());
+}

@@ -204,6 +204,7 @@ fn draw_map(state: &mut State) -> Result<(), Error> {
         contours: map::DEFAULT_CONTOURS,
         samples: None,
         view: None,
+        blend: brdf_atlas_core::BlendRule::Gp,
         no_labels: false,
         no_key: false,
     };

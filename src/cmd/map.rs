@@ -10,7 +10,7 @@ use std::time::Instant;
 use brdf_atlas_core::Model;
 use brdf_atlas_core::limits::MAX_MAP_SIDE;
 use brdf_atlas_core::render::{self, Picture, Style};
-use brdf_atlas_core::{AlbedoMethod, DEFAULT_SAMPLES, LOW_CONFIDENCE_VARIANCE, View};
+use brdf_atlas_core::{AlbedoMethod, BlendRule, DEFAULT_SAMPLES, LOW_CONFIDENCE_VARIANCE, View};
 use brdf_atomic::commit_all;
 
 use crate::args;
@@ -61,6 +61,12 @@ pub struct Args {
     pub samples: Option<u32>,
     #[arg(long, value_name = "X0,X1,Y0,Y1", help = view_help(), value_parser = args::view, allow_hyphen_values = true)]
     pub view: Option<View>,
+    /// The material each pixel shows, as `reconstruct --blend`: `gp` (the
+    /// GP's blend, clamped to >= 0) or `floor` (the soft floor: never
+    /// clamped). The plausible rule has no map: its steps need a pass over
+    /// the store per point.
+    #[arg(long, value_name = "RULE", default_value = "gp", value_parser = args::blend_rule)]
+    pub blend: BlendRule,
     /// Do not write material names beside their points.
     #[arg(long)]
     pub no_labels: bool,
@@ -142,9 +148,13 @@ pub fn draw(model: &Model, args: &Args, report: &mut impl Write) -> Result<(), E
     let t0 = Instant::now();
     let bars = Bars::new("preparing the map");
     let size = args.size as usize;
-    let map = model.albedo_map(size, size, view, samples, &bars)?;
+    let map = model.albedo_map_with(size, size, view, samples, args.blend, &bars)?;
     drop(bars);
     let elapsed = t0.elapsed();
+    let blend = match map.blend {
+        BlendRule::Gp => String::new(),
+        rule => format!(" ({} blend)", rule.name()),
+    };
     let method = match map.method {
         AlbedoMethod::Linear => format!(
             "albedo blended from the {} materials' own albedos (exact: the {} transform is linear)",
@@ -180,7 +190,7 @@ pub fn draw(model: &Model, args: &Args, report: &mut impl Write) -> Result<(), E
     commit_all(staged)?;
     writeln!(
         report,
-        "map {size}x{size} of {} over x {}..{}, y {}..{}: {method}, {}",
+        "map {size}x{size} of {}{blend} over x {}..{}, y {}..{}: {method}, {}",
         model.path().display(),
         view.x0,
         view.x1,
@@ -251,6 +261,7 @@ mod tests {
             contours: 0,
             samples: None,
             view: None,
+            blend: BlendRule::Gp,
             no_labels: false,
             no_key: false,
         })

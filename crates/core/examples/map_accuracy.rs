@@ -6,12 +6,14 @@
 //! pixels of a 1024 x 1024 map of the default view and of a view a hundred
 //! times smaller; and the time of the 1024 x 1024 map (the field's first
 //! map of a domain builds it, later ones reuse it: both are shown).
-//! `cargo run --release -p brdf-atlas-core --example map_accuracy -- MODEL [PIXELS]`.
+//! `cargo run --release -p brdf-atlas-core --example map_accuracy -- MODEL
+//! [PIXELS] [RULE]`: RULE `floor` measures the map of the soft-floor rule
+//! against the exact pass over its material (default `gp`).
 
 use std::time::Instant;
 
 use brdf_atlas_core::measure::reference_albedo;
-use brdf_atlas_core::{AlbedoMap, AlbedoMethod, Model, NoProgress, View};
+use brdf_atlas_core::{AlbedoMap, AlbedoMethod, BlendRule, Model, NoProgress, View};
 
 const SIDE: usize = 1024;
 
@@ -65,6 +67,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .nth(1)
         .ok_or("usage: map_accuracy MODEL [PIXELS]")?;
     let count: usize = std::env::args().nth(2).map_or(Ok(24), |s| s.parse())?;
+    let rule = match std::env::args().nth(3) {
+        Some(name) => BlendRule::parse(&name).ok_or("RULE: gp or floor")?,
+        None => BlendRule::Gp,
+    };
     let model = Model::open(&path)?;
     let views = [
         ("default", View::default()),
@@ -79,10 +85,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .iter()
             .map(|&(x, y)| view.pixel_to_latent(x as f64, y as f64, SIDE, SIDE))
             .collect();
-        let want = points
-            .iter()
-            .map(|x| reference_albedo(&model, x, model.albedo_rule()))
-            .collect::<Result<Vec<_>, _>>()?;
+        let want = match rule {
+            BlendRule::Gp => points
+                .iter()
+                .map(|x| reference_albedo(&model, x, model.albedo_rule()))
+                .collect::<Result<Vec<_>, _>>()?,
+            rule => model.exact_albedos_with(&points, rule)?,
+        };
         for samples in [Some(16), Some(64), Some(256), Some(1024), Some(4096), None] {
             // A fresh model for each, so that "first" includes what a map builds.
             let fresh = Model::open(&path)?;
@@ -90,10 +99,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let timed = samples.is_none_or(|s| s == brdf_atlas_core::DEFAULT_SAMPLES);
             let (map, first, again) = if timed {
                 let t = Instant::now();
-                let map = fresh.albedo_map(SIDE, SIDE, view, samples, &NoProgress)?;
+                let map = fresh.albedo_map_with(SIDE, SIDE, view, samples, rule, &NoProgress)?;
                 let first = t.elapsed().as_secs_f64();
                 let t = Instant::now();
-                fresh.albedo_map(SIDE, SIDE, view, samples, &NoProgress)?;
+                fresh.albedo_map_with(SIDE, SIDE, view, samples, rule, &NoProgress)?;
                 (map, first, t.elapsed().as_secs_f64())
             } else {
                 // Each pixel's value under the per-pixel rule is the same at
@@ -108,7 +117,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                             y0: x[1] - d,
                             y1: x[1] + d,
                         };
-                        let m = fresh.albedo_map(1, 1, v, samples, &NoProgress)?;
+                        let m = fresh.albedo_map_with(1, 1, v, samples, rule, &NoProgress)?;
                         Ok(m.rgb[0].map(f64::from))
                     })
                     .collect::<Result<Vec<_>, Box<dyn std::error::Error>>>()?;

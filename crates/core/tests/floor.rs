@@ -212,3 +212,90 @@ fn held_out_errors_equal_a_dense_recomputation() {
     // The floor moved some held-out predictions: it is not the GP's.
     assert!((0..n).any(|i| (got[i] - ev.errors[0].log[i]).abs() > 1e-9 * got[i]));
 }
+
+/// The dense rule over a blend's clamped values.
+fn dense_albedo(m: &Model, b: &brdf_atlas_core::Blend<'_>) -> [f64; 3] {
+    m.albedo_rule()
+        .integrate(|bin| [0, 1, 2].map(|c| b.value(c, bin).unwrap_or(0.0)))
+}
+
+#[test]
+fn exact_albedos_and_maps_of_the_floor_are_the_floor_materials() {
+    let tmp = tempfile::tempdir().unwrap();
+    for transform in [TransformKind::Raw, TransformKind::Log] {
+        let m = Model::open(fit(tmp.path(), 12, transform)).unwrap();
+        // The exact pass: every point's albedo is the dense rule over the
+        // floor material's table.
+        let points: Vec<[f64; 2]> = POINTS.to_vec();
+        let got = m.exact_albedos_with(&points, BlendRule::Floor).unwrap();
+        let gp = m.exact_albedos(&points).unwrap();
+        let mut differs = false;
+        for ((x, g), p) in points.iter().zip(&got).zip(&gp) {
+            let want = dense_albedo(&m, &m.at_with(x, BlendRule::Floor).unwrap());
+            for c in 0..3 {
+                assert!(
+                    (g[c] - want[c]).abs() <= 1e-9 * want[c].abs().max(1e-9),
+                    "{transform:?} {x:?} {c}: {} vs {}",
+                    g[c],
+                    want[c]
+                );
+                differs |= (g[c] - p[c]).abs() > 1e-6 * p[c].abs();
+            }
+        }
+        assert!(differs, "{transform:?}: the floor moved no albedo");
+        // Maps: a zoomed view gets a field (within 1% of the dense rule
+        // over the floor material), the default view with many samples a
+        // per-pixel rule converging to it; neither is the linear shortcut.
+        let (w, h) = (16usize, 12usize);
+        for (view, samples) in [
+            (
+                brdf_atlas_core::View {
+                    x0: 0.2,
+                    x1: 0.24,
+                    y0: -0.3,
+                    y1: -0.26,
+                },
+                None,
+            ),
+            (brdf_atlas_core::View::default(), Some(200_000)),
+        ] {
+            let map = m
+                .albedo_map_with(w, h, view, samples, BlendRule::Floor, &NoProgress)
+                .unwrap();
+            assert_ne!(map.method, brdf_atlas_core::AlbedoMethod::Linear);
+            assert_eq!(map.blend, BlendRule::Floor);
+            if samples.is_none() {
+                assert!(
+                    matches!(map.method, brdf_atlas_core::AlbedoMethod::Field { .. }),
+                    "{:?}",
+                    map.method
+                );
+            }
+            for &(px, py) in &[(2usize, 2usize), (9, 6), (14, 10)] {
+                let x = view.pixel_to_latent(px as f64, py as f64, w, h);
+                let want = dense_albedo(&m, &m.at_with(&x, BlendRule::Floor).unwrap());
+                let scale = want.iter().fold(1e-3f64, |a, v| a.max(v.abs()));
+                for (c, (&got, want)) in map.rgb[py * w + px].iter().zip(want).enumerate() {
+                    let err = (got as f64 - want).abs() / scale;
+                    // The per-pixel rule is a quadrature of its own (within 2%
+                    // for the GP's blend too: tests/reconstruct.rs).
+                    let bound = if samples.is_some() { 0.02 } else { 0.01 };
+                    assert!(err < bound, "{transform:?} {view:?} ({px},{py}) {c}: {err}");
+                }
+            }
+        }
+        // The plausible rule's steps are not a function of the point's
+        // weights: it has no map.
+        assert!(
+            m.albedo_map_with(
+                4,
+                4,
+                brdf_atlas_core::View::default(),
+                None,
+                BlendRule::Plausible,
+                &NoProgress
+            )
+            .is_err()
+        );
+    }
+}

@@ -2,7 +2,7 @@
 //! itself (the BRDF Explorer plugin): the same levels and marching squares as
 //! the PNG maps of `brdf-atlas map`.
 
-use brdf_atlas_core::{AlbedoMap, AlbedoMethod, View, contour_levels, contours};
+use brdf_atlas_core::{AlbedoMap, AlbedoMethod, BlendRule, View, contour_levels, contours};
 
 use crate::check;
 use crate::status::{BrdfAtlasStatus, Failure, Result, run};
@@ -53,6 +53,7 @@ unsafe fn map_from(rgb: *const f32, width: usize, height: usize) -> Result<Albed
         // Contours read the albedo only.
         variance: vec![0.0; width * height],
         method: AlbedoMethod::Linear,
+        blend: BlendRule::Gp,
     })
 }
 

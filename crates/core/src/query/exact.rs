@@ -10,8 +10,11 @@ use faer::Mat;
 
 use crate::data::transform::InverseForm;
 use crate::dense::product::matmul;
-use crate::error::Result;
+use crate::error::{CoreError, Result};
 use crate::model::Model;
+use crate::query::budget::convex_weights;
+use crate::query::floor::soft_floor;
+use crate::query::plausibility::BlendRule;
 use crate::simd::fastexp;
 use crate::simd::fold::{GROUPS, ordered_blocks};
 
@@ -104,14 +107,29 @@ impl Model {
     /// points' weights `K^-1 k(x)`. The sums are formed in a fixed order:
     /// the answer does not depend on the thread count.
     pub fn exact_albedos(&self, points: &[[f64; 2]]) -> Result<Vec<[f64; 3]>> {
-        self.albedos_over(self.rule_rows(), points)
+        self.albedos_over(self.rule_rows(), points, false)
     }
 
-    /// [`Model::exact_albedos`] with the rows of another rule.
+    /// [`Model::exact_albedos`] of the material `rule` forms at each point:
+    /// the GP's blend or the soft floor's ([`BlendRule::Floor`]: a second
+    /// product of each block, with the points' convex weights). The
+    /// plausible rule's steps need a pass of their own per point
+    /// ([`Model::plausible_blends`]), so it is refused here.
+    pub fn exact_albedos_with(
+        &self,
+        points: &[[f64; 2]],
+        rule: BlendRule,
+    ) -> Result<Vec<[f64; 3]>> {
+        self.albedos_over(self.rule_rows(), points, floor_of(rule)?)
+    }
+
+    /// [`Model::exact_albedos`] with the rows of another rule, and with
+    /// every value on its soft floor if `floor`.
     pub(crate) fn albedos_over(
         &self,
         rule: &RuleRows,
         points: &[[f64; 2]],
+        floor: bool,
     ) -> Result<Vec<[f64; 3]>> {
         self.store().verify_cheap()?;
         let m = points.len();
@@ -132,6 +150,20 @@ impl Model {
             .flat_map(|t| (0..m).map(move |j| (t, j)))
             .map(|(t, j)| w[(t, j)])
             .collect();
+        // The convex weights of every point, laid out as `a` is, for the floor.
+        let av: Vec<f64> = if floor {
+            let rows = crate::gplvm::kernel::rows_of(latent.as_ref());
+            let v: Vec<Vec<f64>> = points
+                .iter()
+                .map(|p| convex_weights(&rows, p, kernel.length_scale, None))
+                .collect();
+            (0..n)
+                .flat_map(|t| (0..m).map(move |j| (t, j)))
+                .map(|(t, j)| v[j][t])
+                .collect()
+        } else {
+            Vec::new()
+        };
         let store = self.store();
         let mean = store.mean();
         // Products in f64 through the library's own kernel (faer's would
@@ -151,10 +183,20 @@ impl Model {
                         store.copy_rows(row, &mut s.z64[k * n..(k + 1) * n]);
                     }
                     matmul(&mut s.t64, &a, &s.z64, n);
+                    if floor {
+                        s.v64.resize(m * len, 0.0);
+                        matmul(&mut s.v64, &av, &s.z64, n);
+                    }
                     for (k, r) in range.enumerate() {
                         let (mu, wt) = (mean[rule.rows[r]], rule.weight[r]);
                         let c = rule.channel[r] as usize;
                         let acc = &mut acc[c * m..(c + 1) * m];
+                        if floor {
+                            let t = &mut s.t64[k * m..(k + 1) * m];
+                            for (t, &v) in t.iter_mut().zip(&s.v64[k * m..(k + 1) * m]) {
+                                *t = soft_floor(mu + *t, mu + v) - mu;
+                            }
+                        }
                         let t = &s.t64[k * m..(k + 1) * m];
                         if rule.exponential {
                             for (o, t) in acc.iter_mut().zip(t) {
@@ -186,10 +228,26 @@ impl Model {
 /// its values at the nodes (kept between calls, so a pass allocates nothing).
 #[derive(Default)]
 struct Scratch {
+    v64: Vec<f64>,
     z64: Vec<f64>,
     t64: Vec<f64>,
 }
 
 thread_local! {
     static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch::default());
+}
+
+/// Whether the map and the exact pass put every value of `rule`'s material on
+/// its soft floor; the plausible rule's steps are not a function of the
+/// point's weights, so no map draws them.
+pub(crate) fn floor_of(rule: BlendRule) -> Result<bool> {
+    match rule {
+        BlendRule::Gp => Ok(false),
+        BlendRule::Floor => Ok(true),
+        BlendRule::Plausible => Err(CoreError::BadQuery(
+            "the plausible rule's albedo has no map (its steps need a pass over the store per \
+             point): use the gp or floor rule"
+                .into(),
+        )),
+    }
 }

@@ -63,7 +63,8 @@ use crate::dense::product::matmul;
 use crate::error::{CoreError, Result};
 use crate::model::Model;
 use crate::progress::{NoProgress, Progress};
-use crate::query::exact::RuleRows;
+use crate::query::exact::{RuleRows, floor_of};
+use crate::query::plausibility::BlendRule;
 use crate::query::view::View;
 use crate::simd::dot;
 
@@ -199,26 +200,44 @@ impl Model {
         budget: usize,
         progress: &dyn Progress,
     ) -> Result<Option<Arc<AlbedoField>>> {
+        self.albedo_field_of(view, budget, BlendRule::Gp, progress)
+    }
+
+    /// [`Model::albedo_field_with`] of the material `rule` forms: the GP's
+    /// blend or the soft floor's (the plausible rule has no map).
+    pub fn albedo_field_of(
+        &self,
+        view: View,
+        budget: usize,
+        rule: BlendRule,
+        progress: &dyn Progress,
+    ) -> Result<Option<Arc<AlbedoField>>> {
         view.check()?;
+        let floor = floor_of(rule)?;
         let domain = domain_of(view);
         let cache = &self.map_basis().fields;
-        let cached = |f: &Cached| f.domain == domain && (f.field.is_some() || f.budget >= budget);
+        let cached = |f: &Cached| {
+            f.domain == domain && f.floor == floor && (f.field.is_some() || f.budget >= budget)
+        };
         if let Some(f) = cache.find(cached) {
             return Ok(f.field.clone());
         }
         // Plan with the per-pixel rule's rows first: a field that would
         // need far more nodes than the budget is given up before any
         // exact node is paid for.
-        let field = match self.plan(domain, budget, progress)? {
-            Some(_) => self.build(domain, budget, progress)?.map(Arc::new),
+        let field = match self.plan(domain, budget, floor, progress)? {
+            Some(_) => self.build(domain, budget, floor, progress)?.map(Arc::new),
             None => None,
         };
         let entry = Arc::new(Cached {
             domain,
+            floor,
             budget,
             field: field.clone(),
         });
-        cache.keep(entry, FIELD_CACHE, cached, |f| f.domain == domain);
+        cache.keep(entry, FIELD_CACHE, cached, |f| {
+            f.domain == domain && f.floor == floor
+        });
         Ok(field)
     }
 
@@ -242,22 +261,30 @@ impl Model {
     /// is then judged not to fit in its budget either (the plan's values
     /// come from another rule, so this is a judgement, not a bound).
     pub fn plan_field(&self, domain: View, budget: usize) -> Result<Option<usize>> {
-        self.plan(domain, budget, &NoProgress)
+        self.plan(domain, budget, false, &NoProgress)
     }
 
-    fn plan(&self, domain: View, budget: usize, progress: &dyn Progress) -> Result<Option<usize>> {
+    fn plan(
+        &self,
+        domain: View,
+        budget: usize,
+        floor: bool,
+        progress: &dyn Progress,
+    ) -> Result<Option<usize>> {
         let cap = PLAN_FACTOR.saturating_mul(budget);
-        let plan = self.albedo_patches(domain, cap, self.plan_rows(), progress)?;
+        let plan = self.albedo_patches(domain, cap, self.plan_rows(), floor, progress)?;
         Ok(plan.map(|(_, nodes)| nodes))
     }
 
     /// The albedo's patches over `domain` with node values from `rows`, and
-    /// the nodes they took; `None` past `budget` nodes.
+    /// the nodes they took; `None` past `budget` nodes. `floor`: every value
+    /// on its soft floor.
     fn albedo_patches(
         &self,
         domain: View,
         budget: usize,
         rows: &RuleRows,
+        floor: bool,
         progress: &dyn Progress,
     ) -> Result<Option<(Vec<Patch>, usize)>> {
         let mut nodes = 0;
@@ -270,7 +297,7 @@ impl Model {
                 return Ok(None);
             }
             Ok(Some(
-                self.albedos_over(rows, pts)?
+                self.albedos_over(rows, pts, floor)?
                     .into_iter()
                     .flatten()
                     .collect(),
@@ -282,17 +309,19 @@ impl Model {
     /// Build the field of `domain` (no cache), or `None` if its albedo would
     /// need more than `budget` exact nodes.
     pub fn build_field(&self, domain: View, budget: usize) -> Result<Option<AlbedoField>> {
-        self.build(domain, budget, &NoProgress)
+        self.build(domain, budget, false, &NoProgress)
     }
 
     fn build(
         &self,
         domain: View,
         budget: usize,
+        floor: bool,
         progress: &dyn Progress,
     ) -> Result<Option<AlbedoField>> {
         let rows = self.rule_rows();
-        let Some((albedo, nodes)) = self.albedo_patches(domain, budget, rows, progress)? else {
+        let Some((albedo, nodes)) = self.albedo_patches(domain, budget, rows, floor, progress)?
+        else {
             return Ok(None);
         };
         let variance = refine(
@@ -317,6 +346,8 @@ impl Model {
 /// model keeps it.
 struct Cached {
     domain: View,
+    /// Every value on its soft floor ([`BlendRule::Floor`]).
+    floor: bool,
     budget: usize,
     field: Option<Arc<AlbedoField>>,
 }

@@ -31,8 +31,11 @@ use crate::dense::product::matmul;
 use crate::error::{CoreError, Result};
 use crate::model::Model;
 use crate::progress::Progress;
-use crate::query::exact::RuleRows;
+use crate::query::budget::convex_weights;
+use crate::query::exact::{RuleRows, floor_of};
 use crate::query::field::{eval_row, variances};
+use crate::query::floor::soft_floor;
+use crate::query::plausibility::BlendRule;
 pub use crate::query::view::View;
 use crate::simd::dot;
 use crate::simd::fastexp;
@@ -82,6 +85,8 @@ pub struct AlbedoMap {
     pub variance: Vec<f32>,
     /// How it was computed.
     pub method: AlbedoMethod,
+    /// The material each pixel shows: the GP's blend or the soft floor's.
+    pub blend: BlendRule,
 }
 
 impl Model {
@@ -191,7 +196,24 @@ impl Model {
         samples: Option<usize>,
         progress: &dyn Progress,
     ) -> Result<AlbedoMap> {
+        self.albedo_map_with(width, height, view, samples, BlendRule::Gp, progress)
+    }
+
+    /// [`Model::albedo_map`] of the material `rule` forms at each pixel: the
+    /// GP's blend, or the soft floor's ([`BlendRule::Floor`]; not linear in
+    /// the weights, so a raw-transform map of it takes the field or the
+    /// per-pixel rule too). The plausible rule has no map.
+    pub fn albedo_map_with(
+        &self,
+        width: usize,
+        height: usize,
+        view: View,
+        samples: Option<usize>,
+        rule: BlendRule,
+        progress: &dyn Progress,
+    ) -> Result<AlbedoMap> {
         self.check_map_request(width, height, view)?;
+        let floor = floor_of(rule)?;
         self.store().verify_cheap()?;
         let n = self.latent().nrows();
         let (ex, ey) = self.kernel_factors(width, height, view);
@@ -200,11 +222,11 @@ impl Model {
         let inv = self.k_inverse();
         let kernel_row = |py: usize| kernel_row(&ex, &ey, n, py);
         progress.start("map", height as u64);
-        let linear = self.file().transform.is_linear();
+        let linear = self.file().transform.is_linear() && !floor;
         let field = match samples {
             None if !linear => {
                 let budget = self.field_budget(width * height, DEFAULT_SAMPLES);
-                self.albedo_field_with(view, budget, progress)?
+                self.albedo_field_of(view, budget, rule, progress)?
             }
             _ => None,
         };
@@ -271,10 +293,13 @@ impl Model {
                     rows,
                     ends,
                     c,
+                    cv,
                     mean,
                     ..
                 } = &*rule;
                 let r = rows.rows.len();
+                let latent = crate::gplvm::kernel::rows_of(self.latent().as_ref());
+                let l = self.file().kernel.length_scale;
                 let (weight, exponential) = (&rows.weight, rows.exponential);
                 rgb.par_chunks_mut(width)
                     .zip(variance.par_chunks_mut(width))
@@ -286,6 +311,24 @@ impl Model {
                         let kx = kernel_row(py);
                         let mut vbuf = vec![0.0f64; r * width];
                         matmul(&mut vbuf, c, &kx, n);
+                        if floor {
+                            // The convex blend's values at every pixel of the
+                            // row, and each value on its soft floor.
+                            let y = view.pixel_to_latent(0.0, py as f64, width, height)[1];
+                            let vx: Vec<f64> = (0..width)
+                                .flat_map(|px| {
+                                    let x = view.pixel_to_latent(px as f64, 0.0, width, height)[0];
+                                    convex_weights(&latent, &[x, y], l, None)
+                                })
+                                .collect();
+                            let mut cbuf = vec![0.0f64; r * width];
+                            matmul(&mut cbuf, cv, &vx, n);
+                            for (col, cvals) in vbuf.chunks_exact_mut(r).zip(cbuf.chunks_exact(r)) {
+                                for ((t, &v), &m) in col.iter_mut().zip(cvals).zip(mean) {
+                                    *t = soft_floor(m + *t, m + v) - m;
+                                }
+                            }
+                        }
                         let mut terms = vec![0.0f64; r];
                         for (px, o) in out.iter_mut().enumerate() {
                             let col = &vbuf[px * r..(px + 1) * r];
@@ -326,6 +369,7 @@ impl Model {
             rgb,
             variance,
             method,
+            blend: rule,
         })
     }
 }
@@ -341,6 +385,9 @@ pub(crate) struct PixelRule {
     rows: RuleRows,
     ends: Vec<usize>,
     c: Vec<f64>,
+    /// `Z_q^T` (column-major `r x n`): the values of a convex blend `v` are
+    /// `mean + Z_q^T v`.
+    cv: Vec<f64>,
     mean: Vec<f64>,
 }
 
@@ -378,6 +425,10 @@ impl Model {
             .flat_map(|i| (0..r).map(move |j| (i, j)))
             .map(|(i, j)| ct[(i, j)])
             .collect();
+        let cv: Vec<f64> = (0..n)
+            .flat_map(|i| (0..r).map(move |j| (i, j)))
+            .map(|(i, j)| zq[(i, j)])
+            .collect();
         let mean: Vec<f64> = rows.rows.iter().map(|&row| store.mean()[row]).collect();
         let rule = Arc::new(PixelRule {
             samples,
@@ -385,6 +436,7 @@ impl Model {
             rows,
             ends,
             c,
+            cv,
             mean,
         });
         cache.keep(rule.clone(), PIXEL_RULE_CACHE, same, |_| false);

@@ -108,6 +108,7 @@ impl Picture {
             view: self.map.view,
             pixel_to_latent: "x = x0 + (px + 0.5) (x1 - x0) / width, y = y1 - (py + 0.5) (y1 - y0) / height; row 0 at the top".into(),
             method: self.map.method,
+            blend: Some(self.map.blend.name().to_string()),
             contour_levels: self.levels.clone(),
             luminance_range: luminance_range(&self.map),
             references: self.references.clone(),

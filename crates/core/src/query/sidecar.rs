@@ -39,6 +39,10 @@ pub struct Sidecar {
     pub pixel_to_latent: String,
     /// How the albedo was computed.
     pub method: AlbedoMethod,
+    /// The blend rule of the material each pixel shows (`gp` or `floor`;
+    /// absent from sidecars written before there was a choice: `gp`).
+    #[serde(default)]
+    pub blend: Option<String>,
     /// Luminance of each contour line.
     pub contour_levels: Vec<f32>,
     /// Smallest and largest luminance on the map.
