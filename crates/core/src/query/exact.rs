@@ -13,7 +13,7 @@ use crate::dense::product::matmul;
 use crate::error::{CoreError, Result};
 use crate::model::Model;
 use crate::query::budget::convex_weights;
-use crate::query::floor::soft_floor;
+use crate::query::floor::floor_points;
 use crate::query::plausibility::BlendRule;
 use crate::simd::fastexp;
 use crate::simd::fold::{GROUPS, ordered_blocks};
@@ -192,10 +192,9 @@ impl Model {
                         let c = rule.channel[r] as usize;
                         let acc = &mut acc[c * m..(c + 1) * m];
                         if floor {
-                            let t = &mut s.t64[k * m..(k + 1) * m];
-                            for (t, &v) in t.iter_mut().zip(&s.v64[k * m..(k + 1) * m]) {
-                                *t = soft_floor(mu + *t, mu + v) - mu;
-                            }
+                            let (t, v) =
+                                (&mut s.t64[k * m..(k + 1) * m], &s.v64[k * m..(k + 1) * m]);
+                            floor_points(t, v, mu);
                         }
                         let t = &s.t64[k * m..(k + 1) * m];
                         if rule.exponential {

@@ -34,7 +34,7 @@ use crate::progress::Progress;
 use crate::query::budget::convex_weights;
 use crate::query::exact::{RuleRows, floor_of};
 use crate::query::field::{eval_row, variances};
-use crate::query::floor::soft_floor;
+use crate::query::floor::floor_rows;
 use crate::query::plausibility::BlendRule;
 pub use crate::query::view::View;
 use crate::simd::dot;
@@ -324,9 +324,7 @@ impl Model {
                             let mut cbuf = vec![0.0f64; r * width];
                             matmul(&mut cbuf, cv, &vx, n);
                             for (col, cvals) in vbuf.chunks_exact_mut(r).zip(cbuf.chunks_exact(r)) {
-                                for ((t, &v), &m) in col.iter_mut().zip(cvals).zip(mean) {
-                                    *t = soft_floor(m + *t, m + v) - m;
-                                }
+                                floor_rows(col, cvals, mean);
                             }
                         }
                         let mut terms = vec![0.0f64; r];
