@@ -62,6 +62,7 @@ class Model:
         height: int = 256,
         view: Optional[Tuple[float, float, float, float]] = None,
         samples: Optional[int] = None,
+        blend: str = "gp",
     ) -> npt.NDArray[np.float32]: ...
     def locate(self, material: Union[_Path, _F64]) -> Location: ...
 

@@ -286,9 +286,10 @@ impl PyModel {
     /// `view = (x0, x1, y0, y1)` (default: the box [-1, 1]^2 with a 10%
     /// margin): linear RGB albedo, (height, width, 3) float32, row 0 at the
     /// top (largest y). `samples`: quadrature points per pixel; None means
-    /// exact (blended per-material albedos) for a raw model and 256
-    /// otherwise. 2-D models only.
-    #[pyo3(signature = (width = 256, height = 256, view = None, samples = None))]
+    /// exact (blended per-material albedos) for a raw model's GP blend and
+    /// 256 otherwise. `blend`: the material each pixel shows, "gp" or
+    /// "floor" (the plausible rule has no map). 2-D models only.
+    #[pyo3(signature = (width = 256, height = 256, view = None, samples = None, blend = "gp"))]
     fn albedo_map<'py>(
         &self,
         py: Python<'py>,
@@ -296,7 +297,9 @@ impl PyModel {
         height: usize,
         view: Option<(f64, f64, f64, f64)>,
         samples: Option<usize>,
+        blend: &str,
     ) -> PyResult<Bound<'py, PyArray3<f32>>> {
+        let rule = rule_of(blend)?;
         let view = view.map_or_else(View::default, |(x0, x1, y0, y1)| View { x0, x1, y0, y1 });
         let samples = match samples {
             Some(s) if s == 0 || s > MAX_SAMPLES => {
@@ -305,13 +308,13 @@ impl PyModel {
                 );
             }
             Some(s) => Some(s),
-            None if self.inner.file().transform.is_linear() => None,
+            None if self.inner.file().transform.is_linear() && rule == BlendRule::Gp => None,
             None => Some(DEFAULT_SAMPLES),
         };
         let map = py
             .detach(|| {
                 self.inner
-                    .albedo_map(width, height, view, samples, &NoProgress)
+                    .albedo_map_with(width, height, view, samples, rule, &NoProgress)
             })
             .map_err(Failure::from)?;
         let flat: Vec<f32> = map.rgb.iter().flatten().copied().collect();

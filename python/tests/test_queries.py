@@ -159,6 +159,20 @@ def test_albedo_map(request, which):
         assert np.allclose(one[0, 0], rho, rtol=rtol), (name, one[0, 0])
 
 
+@pytest.mark.parametrize("which", ["log_model", "raw_model"])
+def test_a_map_of_the_floor_rule(request, which):
+    model = request.getfixturevalue(which)
+    gp = model.albedo_map(24, 16)
+    floor = model.albedo_map(24, 16, blend="floor")
+    assert floor.shape == gp.shape and np.isfinite(floor).all() and (floor >= 0).all()
+    # The floor lifts every value a little (and those the GP drives below
+    # its floor a lot): not the GP's map.
+    assert not np.array_equal(floor, gp)
+    # The plausible rule's steps need a pass over the store per point: no map.
+    with pytest.raises(ba.Error, match="no map"):
+        model.albedo_map(4, 4, blend="plausible")
+
+
 @pytest.mark.parametrize("blend", ["gp", "plausible", "floor"])
 def test_plausibility_and_confidence_equal_the_cli_record(log_model, cli, tmp_path, blend):
     x = [0.9, -0.95]
