@@ -230,29 +230,25 @@ impl<'m> Blend<'m> {
 
     /// The same point with weights per `theta_h` bin (and a fresh memo).
     pub(crate) fn with_bands(&self, bands: Bands) -> Blend<'m> {
-        Blend {
-            model: self.model,
-            x: self.x.clone(),
-            kernel: self.kernel.clone(),
-            gp: self.gp.clone(),
-            weights: self.weights.clone(),
-            bands: Some(Box::new(bands)),
-            floor: None,
-            memo: OnceLock::new(),
-        }
+        self.moved(Some(Box::new(bands)), None)
     }
 
     /// The same point with every value lifted onto the soft floor under the
     /// blend of the convex weights `convex` (and a fresh memo).
     pub(crate) fn with_floor(&self, convex: Vec<f64>) -> Blend<'m> {
+        self.moved(None, Some(convex.into_boxed_slice()))
+    }
+
+    /// The same point and weights under a rule's `bands` or `floor`.
+    fn moved(&self, bands: Option<Box<Bands>>, floor: Option<Box<[f64]>>) -> Blend<'m> {
         Blend {
             model: self.model,
             x: self.x.clone(),
             kernel: self.kernel.clone(),
             gp: self.gp.clone(),
             weights: self.weights.clone(),
-            bands: None,
-            floor: Some(convex.into_boxed_slice()),
+            bands,
+            floor,
             memo: OnceLock::new(),
         }
     }
