@@ -116,6 +116,20 @@ pub(crate) fn convex_weights(
     k.iter().map(|v| v / sum).collect()
 }
 
+impl crate::model::Model {
+    /// The convex weights ([`convex_weights`]) at each of `points`, with the
+    /// model's latent points and length scale: what the plausible rule steps
+    /// towards and the soft floor lies under.
+    pub(crate) fn convex_weights_at<P: AsRef<[f64]>>(&self, points: &[P]) -> Vec<Vec<f64>> {
+        let latent = crate::gplvm::kernel::rows_of(self.latent().as_ref());
+        let l = self.file().kernel.length_scale;
+        points
+            .iter()
+            .map(|x| convex_weights(&latent, x.as_ref(), l, None))
+            .collect()
+    }
+}
+
 /// The share of a blend's cosine-weighted reflectance that the clamp may
 /// remove before the weights are moved: 0.05%.
 pub const CLAMP_BUDGET: f64 = 5e-4;

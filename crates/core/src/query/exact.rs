@@ -12,7 +12,6 @@ use crate::data::transform::InverseForm;
 use crate::dense::product::matmul;
 use crate::error::{CoreError, Result};
 use crate::model::Model;
-use crate::query::budget::convex_weights;
 use crate::query::floor::floor_points;
 use crate::query::plausibility::BlendRule;
 use crate::simd::fastexp;
@@ -152,11 +151,7 @@ impl Model {
             .collect();
         // The convex weights of every point, laid out as `a` is, for the floor.
         let av: Vec<f64> = if floor {
-            let rows = crate::gplvm::kernel::rows_of(latent.as_ref());
-            let v: Vec<Vec<f64>> = points
-                .iter()
-                .map(|p| convex_weights(&rows, p, kernel.length_scale, None))
-                .collect();
+            let v = self.convex_weights_at(points);
             (0..n)
                 .flat_map(|t| (0..m).map(move |j| (t, j)))
                 .map(|(t, j)| v[j][t])

@@ -31,7 +31,6 @@ use crate::dense::product::matmul;
 use crate::error::{CoreError, Result};
 use crate::model::Model;
 use crate::progress::Progress;
-use crate::query::budget::convex_weights;
 use crate::query::exact::{RuleRows, floor_of};
 use crate::query::field::{eval_row, variances};
 use crate::query::floor::floor_rows;
@@ -298,8 +297,6 @@ impl Model {
                     ..
                 } = &*rule;
                 let r = rows.rows.len();
-                let latent = crate::gplvm::kernel::rows_of(self.latent().as_ref());
-                let l = self.file().kernel.length_scale;
                 let (weight, exponential) = (&rows.weight, rows.exponential);
                 rgb.par_chunks_mut(width)
                     .zip(variance.par_chunks_mut(width))
@@ -315,12 +312,12 @@ impl Model {
                             // The convex blend's values at every pixel of the
                             // row, and each value on its soft floor.
                             let y = view.pixel_to_latent(0.0, py as f64, width, height)[1];
-                            let vx: Vec<f64> = (0..width)
-                                .flat_map(|px| {
-                                    let x = view.pixel_to_latent(px as f64, 0.0, width, height)[0];
-                                    convex_weights(&latent, &[x, y], l, None)
+                            let xs: Vec<[f64; 2]> = (0..width)
+                                .map(|px| {
+                                    [view.pixel_to_latent(px as f64, 0.0, width, height)[0], y]
                                 })
                                 .collect();
+                            let vx: Vec<f64> = self.convex_weights_at(&xs).concat();
                             let mut cbuf = vec![0.0f64; r * width];
                             matmul(&mut cbuf, cv, &vx, n);
                             for (col, cvals) in vbuf.chunks_exact_mut(r).zip(cbuf.chunks_exact(r)) {

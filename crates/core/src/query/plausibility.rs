@@ -23,7 +23,6 @@ use serde::Serialize;
 use crate::data::transform::InverseForm;
 use crate::error::Result;
 use crate::model::Model;
-use crate::query::budget::convex_weights;
 use crate::query::reconstruct::Blend;
 
 /// Rows a worker handles at once (fixed, so sums do not depend on the thread count).
@@ -139,9 +138,8 @@ impl Model {
             }
             BlendRule::Floor => {
                 let gp = self.at(x)?;
-                let latent = crate::gplvm::kernel::rows_of(self.latent().as_ref());
-                let l = self.file().kernel.length_scale;
-                Ok(gp.with_floor(convex_weights(&latent, x, l, None)))
+                let convex = self.convex_weights_at(&[x]).pop().expect("one point");
+                Ok(gp.with_floor(convex))
             }
         }
     }

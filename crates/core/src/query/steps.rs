@@ -18,9 +18,8 @@ use rayon::prelude::*;
 use crate::data::store::Rows;
 use crate::dense::product::matmul;
 use crate::error::Result;
-use crate::gplvm::kernel::rows_of;
 use crate::model::Model;
-use crate::query::budget::{Budget, CLAMP_BUDGET, STEPS, convex_weights, counted};
+use crate::query::budget::{Budget, CLAMP_BUDGET, STEPS, counted};
 use crate::query::reconstruct::{Bands, Blend};
 use crate::simd::dot;
 
@@ -54,16 +53,11 @@ impl Model {
     /// the store for the steps of all of them, then each point's albedo
     /// floor (point queries at the bins of the directional rule).
     pub fn plausible_blends(&self, points: &[Vec<f64>]) -> Result<Vec<Blend<'_>>> {
-        let latent = rows_of(self.latent().as_ref());
-        let l = self.file().kernel.length_scale;
         let gps = points
             .iter()
             .map(|x| self.at(x))
             .collect::<Result<Vec<_>>>()?;
-        let convex: Vec<Vec<f64>> = points
-            .iter()
-            .map(|x| convex_weights(&latent, x, l, None))
-            .collect();
+        let convex = self.convex_weights_at(points);
         let steps = self.plausible_steps(&gps, &convex)?;
         Ok(gps
             .into_par_iter()
