@@ -71,19 +71,20 @@ pub struct ModelPoint {
     /// Latent point, x,y (q numbers for a q-dimensional model).
     #[arg(long, value_name = "X,Y", value_parser = point, allow_hyphen_values = true)]
     pub at: Point,
-    /// How the point's weights are formed: `gp` (the GPLVM's prediction,
-    /// values clamped to >= 0), `plausible` (the GP's weights moved towards
-    /// a kernel-weighted average of the materials just far enough that the
-    /// clamp removes at most 0.05% of the reflectance; one more pass over the
-    /// store) or `floor` (each GP value lifted softly onto a floor at 0.3
-    /// times that average's value: never clamped, no extra pass).
-    #[arg(long, value_name = "RULE", default_value = "gp", value_parser = blend_rule)]
+    /// How the point's material is formed: `floor` (the default: the
+    /// GPLVM's prediction, each value lifted softly onto a floor at 0.3
+    /// times a kernel-weighted average of the materials: never clamped, the
+    /// material the map shows), `gp` (the GPLVM's prediction as it is,
+    /// values clamped to >= 0) or `plausible` (the GP's weights moved
+    /// towards that average just far enough that the clamp removes at most
+    /// 0.05% of the reflectance; one more pass over the store).
+    #[arg(long, value_name = "RULE", default_value = "floor", value_parser = blend_rule)]
     pub blend: BlendRule,
 }
 
 /// Parse a blend rule name.
 pub(crate) fn blend_rule(text: &str) -> Result<BlendRule, String> {
-    BlendRule::parse(text).ok_or_else(|| format!("expected gp, plausible or floor, got {text:?}"))
+    BlendRule::parse(text).ok_or_else(|| format!("expected floor, gp or plausible, got {text:?}"))
 }
 
 impl ModelPoint {

@@ -1,63 +1,17 @@
 //! End-to-end tests of the model commands (`fit`, `reconstruct`, `eval`,
-//! `map`, `locate`) on small synthetic databases: 16x16x32 tables fit in
+//! `map`, `swatches`) on small synthetic databases: 16x16x32 tables fit in
 //! milliseconds, so each test builds its own model in a temporary directory.
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use brdf_atlas_core::AlbedoMethod;
 use brdf_atlas_core::render::read_sidecar;
-use brdf_atlas_core::{Model, OptimizerKind};
+use brdf_atlas_core::{BlendRule, Model, OptimizerKind};
 use brdf_merl::{MerlFile, angles::direction};
-use common::{binaries, brdf_atlas, fit, map, point_after_at, synth, texts};
-
-const DIMS: &str = "16,16,32";
-
-/// A temporary directory with `count` materials in `merl/` and a model
-/// fitted with `extra` arguments at `model.atlas`.
-struct Fixture {
-    dir: tempfile::TempDir,
-    count: usize,
-    fit_stdout: String,
-}
-
-impl Fixture {
-    fn new(count: usize, extra: &[&str]) -> Fixture {
-        let dir = tempfile::tempdir().unwrap();
-        let data = dir.path().join("merl");
-        synth(&data, count, DIMS, 11);
-        let fit_stdout = fit(&data, &dir.path().join("model.atlas"), extra);
-        Fixture {
-            dir,
-            count,
-            fit_stdout,
-        }
-    }
-
-    fn path(&self, name: &str) -> PathBuf {
-        self.dir.path().join(name)
-    }
-
-    fn model(&self) -> PathBuf {
-        self.path("model.atlas")
-    }
-
-    fn data(&self) -> PathBuf {
-        self.path("merl")
-    }
-}
-
-/// Exit status 1 and exactly one line, `error: ...`, containing every word of `want`.
-fn assert_one_error_line(out: &std::process::Output, want: &[&str]) {
-    let (_, stderr) = texts(out);
-    assert_eq!(out.status.code(), Some(1), "{stderr}");
-    assert_eq!(stderr.lines().count(), 1, "one line: {stderr}");
-    assert!(stderr.starts_with("error: "), "{stderr}");
-    for w in want {
-        assert!(stderr.contains(w), "expected {w:?} in {stderr}");
-    }
-}
+use common::{FIXTURE_DIMS as DIMS, Fixture, assert_one_error_line};
+use common::{binaries, brdf_atlas, map, synth, texts};
 
 #[test]
 fn help_documents_the_model_commands() {
@@ -382,16 +336,20 @@ fn eval_prints_what_the_library_computes() {
         ((0.0, 0.0), (0.0, 0.0)),
     ];
     let model = Model::open(fx.model()).unwrap();
-    let blend = model.at(&at).unwrap();
-    let expected: Vec<Option<[f64; 3]>> = pairs
-        .iter()
-        .map(|((ti, pi), (to, po))| {
-            blend.eval(
-                direction(f64::to_radians(*ti), f64::to_radians(*pi)),
-                direction(f64::to_radians(*to), f64::to_radians(*po)),
-            )
-        })
-        .collect();
+    let expect = |rule: BlendRule| -> Vec<Option<[f64; 3]>> {
+        let blend = model.at_with(&at, rule).unwrap();
+        pairs
+            .iter()
+            .map(|((ti, pi), (to, po))| {
+                blend.eval(
+                    direction(f64::to_radians(*ti), f64::to_radians(*pi)),
+                    direction(f64::to_radians(*to), f64::to_radians(*po)),
+                )
+            })
+            .collect()
+    };
+    // The default rule is the soft floor.
+    let expected = expect(BlendRule::Floor);
     assert!(expected[2].is_none(), "95 degrees is below the horizon");
     assert!(expected.iter().filter(|v| v.is_some()).count() >= 3);
     let check = |stdout: &str, want: &[Option<[f64; 3]>]| {
@@ -450,6 +408,23 @@ fn eval_prints_what_the_library_computes() {
     assert!(out.status.success(), "{stderr}");
     check(&stdout, &expected);
 
+    // The GP's own blend on request: here it differs from the floor's.
+    let gp = expect(BlendRule::Gp);
+    assert_ne!(gp, expected);
+    let out = brdf_atlas([
+        Path::new("eval"),
+        &fx.model(),
+        Path::new("--at"),
+        Path::new("0.25,-0.4"),
+        Path::new("--batch"),
+        &batch,
+        Path::new("--blend"),
+        Path::new("gp"),
+    ]);
+    let (stdout, stderr) = texts(&out);
+    assert!(out.status.success(), "{stderr}");
+    check(&stdout, &gp);
+
     // A bad line is named with its number.
     std::fs::write(&batch, "30 0 30 180\n30 0 thirty 180\n").unwrap();
     let out = brdf_atlas([
@@ -461,60 +436,6 @@ fn eval_prints_what_the_library_computes() {
         &batch,
     ]);
     assert_one_error_line(&out, &["pairs.txt:2:", "theta_i phi_i theta_o phi_o"]);
-}
-
-#[test]
-fn locate_puts_materials_inside_the_box_near_themselves() {
-    let fx = Fixture::new(6, &["--transform", "raw"]);
-    let files = binaries(&fx.data());
-    let mut args = vec![PathBuf::from("locate"), fx.model()];
-    args.extend(files.iter().take(3).cloned());
-    let out = brdf_atlas(&args);
-    let (stdout, stderr) = texts(&out);
-    assert!(out.status.success(), "{stderr}");
-    let located: Vec<&str> = stdout.lines().filter(|l| l.contains(": at (")).collect();
-    assert_eq!(located.len(), 3, "{stdout}");
-    for (line, file) in located.iter().zip(&files) {
-        assert!(line.starts_with(&file.display().to_string()), "{line}");
-        let x = point_after_at(line);
-        assert_eq!(x.len(), 2, "{line}");
-        assert!(x.iter().all(|v| (-1.0..=1.0).contains(v)), "{line}");
-    }
-    assert!(
-        stdout.contains("rmse") && stdout.contains("spread"),
-        "{stdout}"
-    );
-    // A training material is its own nearest neighbour.
-    for (block, file) in stdout.split(": at (").skip(1).zip(&files) {
-        let nearest = block
-            .lines()
-            .find(|l| l.trim_start().starts_with("nearest"))
-            .unwrap();
-        let first = nearest.trim_start()["nearest".len()..].trim_start();
-        let name = file.file_stem().unwrap().to_str().unwrap();
-        assert!(first.starts_with(name), "{nearest} for {name}");
-    }
-
-    // Bad files get one line each; good ones are still reported.
-    let wrong_dims = fx.path("other");
-    synth(&wrong_dims, 1, "8,8,16", 2);
-    let out = brdf_atlas([
-        PathBuf::from("locate"),
-        fx.model(),
-        binaries(&wrong_dims)[0].clone(),
-        files[0].clone(),
-        fx.path("missing.binary"),
-    ]);
-    let (stdout, stderr) = texts(&out);
-    assert_eq!(out.status.code(), Some(1), "{stderr}");
-    assert_eq!(stdout.lines().filter(|l| l.contains(": at (")).count(), 1);
-    let errors: Vec<&str> = stderr.lines().collect();
-    assert_eq!(errors.len(), 2, "{stderr}");
-    assert!(
-        errors[0].contains("8x8x16") && errors[0].contains("16x16x32"),
-        "{stderr}"
-    );
-    assert!(errors[1].contains("missing.binary"), "{stderr}");
 }
 
 /// PNG width and height, decoded.
@@ -576,6 +497,10 @@ fn map_of_a_raw_model_is_linear_and_honours_its_options() {
             &"--view",
             &"-0.5,0.5,-1,0",
             &"--no-labels",
+            // The GP's material is linear in the weights; the default
+            // (the soft floor) is not.
+            &"--blend",
+            &"gp",
         ],
     );
     let (stdout, stderr) = texts(&out);
@@ -668,31 +593,4 @@ fn swatches_writes_a_sheet_of_spheres_and_names_what_is_wrong() {
     ]);
     assert_one_error_line(&out, &["model.atlas", "no-such-material"]);
     assert!(!fx.path("none.png").exists());
-}
-
-#[test]
-fn locate_reaches_beyond_the_box_and_says_so() {
-    let fx = Fixture::new(6, &[]);
-    let beyond = fx.path("beyond.binary");
-    let out = brdf_atlas([
-        "reconstruct".as_ref(),
-        fx.model().as_os_str(),
-        "--at".as_ref(),
-        "1.6,0.3".as_ref(),
-        "-o".as_ref(),
-        beyond.as_os_str(),
-    ]);
-    assert!(out.status.success(), "{}", texts(&out).1);
-    let out = brdf_atlas([PathBuf::from("locate"), fx.model(), beyond]);
-    let (stdout, stderr) = texts(&out);
-    assert!(out.status.success(), "{stderr}");
-    let x = point_after_at(stdout.lines().next().unwrap());
-    assert!(
-        (x[0] - 1.6).abs() < 0.03 && (x[1] - 0.3).abs() < 0.03,
-        "{stdout}"
-    );
-    assert!(
-        stdout.contains("outside the map's default view") && stdout.contains("--view=-2,2,-2,2"),
-        "{stdout}"
-    );
 }

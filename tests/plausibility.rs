@@ -229,54 +229,48 @@ fn an_unknown_blend_rule_is_one_clear_line() {
     let (_, stderr) = texts(&out);
     assert!(!out.status.success());
     assert!(
-        stderr.contains("expected gp, plausible or floor, got \"convex\""),
+        stderr.contains("expected floor, gp or plausible, got \"convex\""),
         "{stderr}"
     );
 }
 
 #[test]
-fn a_map_of_the_floor_rule_says_so_and_the_plausible_rule_has_none() {
+fn a_map_shows_the_floor_by_default_the_gp_on_request_and_the_plausible_rule_has_none() {
     let tmp = tempfile::tempdir().unwrap();
     let model_path = fitted(tmp.path());
     let model = Model::open(&model_path).unwrap();
-    let map = |blend: &str, png: &str| {
-        brdf_atlas([
-            "map",
-            model_path.to_str().unwrap(),
-            "--size",
-            "48",
-            "--blend",
-            blend,
-            "-o",
-            tmp.path().join(png).to_str().unwrap(),
-        ])
+    let map = |blend: Option<&str>, png: &str| {
+        let png = tmp.path().join(png);
+        let mut args = vec!["map", model_path.to_str().unwrap(), "--size", "48"];
+        args.extend(blend.map(|b| ["--blend", b]).into_iter().flatten());
+        args.extend(["-o", png.to_str().unwrap()]);
+        brdf_atlas(args)
     };
-    let out = map("floor", "floor.png");
+    let sidecar = |name: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(tmp.path().join(name)).unwrap()).unwrap()
+    };
+    let out = map(None, "floor.png");
     let (stdout, stderr) = texts(&out);
     assert!(out.status.success(), "{stderr}");
-    assert!(stdout.contains("(floor blend)"), "{stdout}");
-    let sidecar: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(tmp.path().join("floor.json")).unwrap())
-            .unwrap();
-    assert_eq!(sidecar["blend"], "floor");
+    assert!(!stdout.contains("blend)"), "{stdout}");
+    let floor = sidecar("floor.json");
+    assert_eq!(floor["blend"], "floor");
     // The map's pixels are the library's map of the floor rule.
-    let want = model
-        .albedo_map_with(
-            48,
-            48,
-            brdf_atlas_core::View::default(),
-            None,
-            BlendRule::Floor,
-            &brdf_atlas_core::NoProgress,
-        )
-        .unwrap();
-    assert_eq!(
-        serde_json::to_value(want.method).unwrap(),
-        sidecar["method"],
-        "{sidecar}"
-    );
+    let want = |rule| {
+        let view = brdf_atlas_core::View::default();
+        let map = model.albedo_map_with(48, 48, view, None, rule, &brdf_atlas_core::NoProgress);
+        serde_json::to_value(map.unwrap().method).unwrap()
+    };
+    assert_eq!(want(BlendRule::Floor), floor["method"], "{floor}");
+    let out = map(Some("gp"), "gp.png");
+    let (stdout, stderr) = texts(&out);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stdout.contains("(gp blend)"), "{stdout}");
+    let gp = sidecar("gp.json");
+    assert_eq!(gp["blend"], "gp");
+    assert_eq!(want(BlendRule::Gp), gp["method"], "{gp}");
     // The plausible rule: one line naming it, no picture.
-    let out = map("plausible", "plausible.png");
+    let out = map(Some("plausible"), "plausible.png");
     let (_, stderr) = texts(&out);
     assert!(!out.status.success());
     assert_eq!(stderr.lines().count(), 1, "{stderr}");

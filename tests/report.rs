@@ -104,8 +104,9 @@ fn report_writes_every_file_and_fails_atomically() {
     let per = std::fs::read_to_string(rep.join("loo-materials.csv")).unwrap();
     assert_eq!(per.lines().count(), 1 + (2 * 11 + 3) * 6);
     // Plausibility: a 3 x 3 grid, three models (log with the fixed and the
-    // learned kernel, raw), two rules; the plausible rule never clamps more
-    // than the GP at the same point.
+    // learned kernel, raw), three rules; the plausible rule never clamps
+    // more than the GP at the same point, and the soft floor (the default)
+    // never clamps at all.
     assert!(md.contains("## Plausibility") && md.contains("(plausibility.png)"));
     assert!(md.contains("How spread the map is") && md.contains("log with the learned kernel"));
     let pl = std::fs::read_to_string(rep.join("plausibility.csv")).unwrap();
@@ -114,10 +115,13 @@ fn report_writes_every_file_and_fails_atomically() {
         .skip(1)
         .map(|l| l.split(',').map(str::to_string).collect())
         .collect();
-    assert_eq!(rows.len(), 3 * 2 * 9, "{pl}");
+    assert_eq!(rows.len(), 3 * 3 * 9, "{pl}");
     for r in &rows {
         let clamped: f64 = r[5].parse().unwrap();
         assert!((0.0..=1.0).contains(&clamped), "{r:?}");
+        if r[2] == "floor" {
+            assert_eq!(clamped, 0.0, "{r:?}");
+        }
         if r[2] == "plausible" {
             let gp = rows
                 .iter()

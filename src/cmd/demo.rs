@@ -204,7 +204,7 @@ fn draw_map(state: &mut State) -> Result<(), Error> {
         contours: map::DEFAULT_CONTOURS,
         samples: None,
         view: None,
-        blend: brdf_atlas_core::BlendRule::Gp,
+        blend: brdf_atlas_core::BlendRule::default(),
         no_labels: false,
         no_key: false,
     };
@@ -219,7 +219,15 @@ fn reconstruct_between(state: &mut State) -> Result<(), Error> {
         .map(|c| 0.5 * (latent[(0, c)] + latent[(1, c)]))
         .collect();
     let out = state.args.dir.join(RECONSTRUCTED);
-    indented(|report| reconstruct::write(model, &x, brdf_atlas_core::BlendRule::Gp, &out, report))?;
+    indented(|report| {
+        reconstruct::write(
+            model,
+            &x,
+            brdf_atlas_core::BlendRule::default(),
+            &out,
+            report,
+        )
+    })?;
     state.between = Some((model.names()[0].clone(), model.names()[1].clone()));
     Ok(())
 }

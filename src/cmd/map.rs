@@ -61,11 +61,11 @@ pub struct Args {
     pub samples: Option<u32>,
     #[arg(long, value_name = "X0,X1,Y0,Y1", help = view_help(), value_parser = args::view, allow_hyphen_values = true)]
     pub view: Option<View>,
-    /// The material each pixel shows, as `reconstruct --blend`: `gp` (the
-    /// GP's blend, clamped to >= 0) or `floor` (the soft floor: never
-    /// clamped). The plausible rule has no map: its steps need a pass over
-    /// the store per point.
-    #[arg(long, value_name = "RULE", default_value = "gp", value_parser = args::blend_rule)]
+    /// The material each pixel shows, as `reconstruct --blend`: `floor`
+    /// (the default: the soft floor, never clamped) or `gp` (the GP's blend,
+    /// clamped to >= 0; exact and fast for the raw transform). The plausible
+    /// rule has no map: its steps need a pass over the store per point.
+    #[arg(long, value_name = "RULE", default_value = "floor", value_parser = args::blend_rule)]
     pub blend: BlendRule,
     /// Do not write material names beside their points.
     #[arg(long)]
@@ -152,7 +152,7 @@ pub fn draw(model: &Model, args: &Args, report: &mut impl Write) -> Result<(), E
     drop(bars);
     let elapsed = t0.elapsed();
     let blend = match map.blend {
-        BlendRule::Gp => String::new(),
+        BlendRule::Floor => String::new(),
         rule => format!(" ({} blend)", rule.name()),
     };
     let method = match map.method {
@@ -261,7 +261,7 @@ mod tests {
             contours: 0,
             samples: None,
             view: None,
-            blend: BlendRule::Gp,
+            blend: BlendRule::default(),
             no_labels: false,
             no_key: false,
         })

@@ -57,9 +57,9 @@ pub struct Args {
     #[arg(long = "light", value_name = "X,Y,Z,E", value_parser = light, allow_hyphen_values = true)]
     pub lights: Vec<Light>,
     /// How each sphere's material is formed, as `reconstruct --blend`:
-    /// `gp`, `plausible` (the plausible rule's steps for every sphere in
-    /// one pass over the store) or `floor`.
-    #[arg(long, value_name = "RULE", default_value = "gp", value_parser = args::blend_rule)]
+    /// `floor` (the default), `gp` or `plausible` (the plausible rule's
+    /// steps for every sphere in one pass over the store).
+    #[arg(long, value_name = "RULE", default_value = "floor", value_parser = args::blend_rule)]
     pub blend: BlendRule,
 }
 

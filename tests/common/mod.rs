@@ -138,3 +138,51 @@ pub fn point_after_at(line: &str) -> Vec<f64> {
         .map(|v| v.trim().parse().expect("a coordinate"))
         .collect()
 }
+
+/// Dims of [`Fixture`]'s materials.
+pub const FIXTURE_DIMS: &str = "16,16,32";
+
+/// A temporary directory with `count` materials in `merl/` and a model
+/// fitted with `extra` arguments at `model.atlas`.
+pub struct Fixture {
+    pub dir: tempfile::TempDir,
+    pub count: usize,
+    pub fit_stdout: String,
+}
+
+impl Fixture {
+    pub fn new(count: usize, extra: &[&str]) -> Fixture {
+        let dir = tempfile::tempdir().unwrap();
+        let data = dir.path().join("merl");
+        synth(&data, count, FIXTURE_DIMS, 11);
+        let fit_stdout = fit(&data, &dir.path().join("model.atlas"), extra);
+        Fixture {
+            dir,
+            count,
+            fit_stdout,
+        }
+    }
+
+    pub fn path(&self, name: &str) -> PathBuf {
+        self.dir.path().join(name)
+    }
+
+    pub fn model(&self) -> PathBuf {
+        self.path("model.atlas")
+    }
+
+    pub fn data(&self) -> PathBuf {
+        self.path("merl")
+    }
+}
+
+/// Exit status 1 and exactly one line, `error: ...`, containing every word of `want`.
+pub fn assert_one_error_line(out: &std::process::Output, want: &[&str]) {
+    let (_, stderr) = texts(out);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "one line: {stderr}");
+    assert!(stderr.starts_with("error: "), "{stderr}");
+    for w in want {
+        assert!(stderr.contains(w), "expected {w:?} in {stderr}");
+    }
+}

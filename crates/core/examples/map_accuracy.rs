@@ -7,8 +7,8 @@
 //! times smaller; and the time of the 1024 x 1024 map (the field's first
 //! map of a domain builds it, later ones reuse it: both are shown).
 //! `cargo run --release -p brdf-atlas-core --example map_accuracy -- MODEL
-//! [PIXELS] [RULE]`: RULE `floor` measures the map of the soft-floor rule
-//! against the exact pass over its material (default `gp`).
+//! [PIXELS] [RULE]`: RULE is the material mapped, `floor` (the default) or
+//! `gp`; the reference is the dense rule on that material's reconstruction.
 
 use std::time::Instant;
 
@@ -65,11 +65,11 @@ fn describe(method: &AlbedoMethod) -> String {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = std::env::args()
         .nth(1)
-        .ok_or("usage: map_accuracy MODEL [PIXELS]")?;
+        .ok_or("usage: map_accuracy MODEL [PIXELS] [RULE]")?;
     let count: usize = std::env::args().nth(2).map_or(Ok(24), |s| s.parse())?;
     let rule = match std::env::args().nth(3) {
-        Some(name) => BlendRule::parse(&name).ok_or("RULE: gp or floor")?,
-        None => BlendRule::Gp,
+        Some(name) => BlendRule::parse(&name).ok_or("RULE: floor or gp")?,
+        None => BlendRule::default(),
     };
     let model = Model::open(&path)?;
     let views = [
@@ -85,13 +85,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .iter()
             .map(|&(x, y)| view.pixel_to_latent(x as f64, y as f64, SIDE, SIDE))
             .collect();
-        let want = match rule {
-            BlendRule::Gp => points
-                .iter()
-                .map(|x| reference_albedo(&model, x, model.albedo_rule()))
-                .collect::<Result<Vec<_>, _>>()?,
-            rule => model.exact_albedos_with(&points, rule)?,
-        };
+        let want = points
+            .iter()
+            .map(|x| reference_albedo(&model, x, rule, model.albedo_rule()))
+            .collect::<Result<Vec<_>, _>>()?;
         for samples in [Some(16), Some(64), Some(256), Some(1024), Some(4096), None] {
             // A fresh model for each, so that "first" includes what a map builds.
             let fresh = Model::open(&path)?;

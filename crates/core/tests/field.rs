@@ -12,8 +12,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use brdf_atlas_core::measure::reference_albedo;
 use brdf_atlas_core::{
-    AlbedoMap, AlbedoMethod, CoreError, FitOptions, GplvmParams, Model, NoProgress, Precision,
-    Progress, TransformKind, View, fit_dir,
+    AlbedoMap, AlbedoMethod, BlendRule, CoreError, FitOptions, GplvmParams, Model, NoProgress,
+    Precision, Progress, TransformKind, View, fit_dir,
 };
 use brdf_merl::{Dims, synth};
 
@@ -57,7 +57,7 @@ fn worst_error(model: &Model, map: &AlbedoMap, pixels: &[(usize, usize)]) -> f64
         let x = map
             .view
             .pixel_to_latent(px as f64, py as f64, map.width, map.height);
-        let want = reference_albedo(model, &x, rule).unwrap();
+        let want = reference_albedo(model, &x, map.blend, rule).unwrap();
         let got = map.rgb[py * map.width + px];
         let scale = want.iter().fold(1e-9f64, |a, v| a.max(v.abs()));
         for c in 0..3 {
@@ -178,7 +178,7 @@ fn exact_albedos_are_the_dense_rule_on_the_full_reconstruction() {
     let points = [[0.0, 0.0], [0.9, -0.4], [-1.05, 1.1], [2.0, 0.5]];
     let got = model.exact_albedos(&points).unwrap();
     for (x, g) in points.iter().zip(&got) {
-        let want = reference_albedo(&model, x, model.albedo_rule()).unwrap();
+        let want = reference_albedo(&model, x, BlendRule::default(), model.albedo_rule()).unwrap();
         for c in 0..3 {
             assert!(
                 (g[c] - want[c]).abs() <= 1e-6 * want[c].abs().max(1e-3),
@@ -190,13 +190,29 @@ fn exact_albedos_are_the_dense_rule_on_the_full_reconstruction() {
 }
 
 #[test]
-fn a_raw_model_keeps_its_exact_linear_map() {
+fn a_raw_models_gp_map_is_the_exact_linear_one_and_its_floor_map_is_not() {
     let tmp = tempfile::tempdir().unwrap();
     let model = Model::open(fit(tmp.path(), 6, TransformKind::Raw)).unwrap();
-    let map = model
-        .albedo_map(24, 24, View::default(), None, &NoProgress)
+    let (view, rule) = (View::default(), BlendRule::Gp);
+    let gp = model
+        .albedo_map_with(24, 24, view, None, rule, &NoProgress)
         .unwrap();
-    assert_eq!(map.method, AlbedoMethod::Linear);
+    assert_eq!((gp.method, gp.blend), (AlbedoMethod::Linear, BlendRule::Gp));
+    // The soft floor is not linear in the weights: the default map of a raw
+    // model integrates its material; in a small view with a field, within
+    // the field's accuracy.
+    let floor = model.albedo_map(24, 24, view, None, &NoProgress).unwrap();
+    assert_ne!(floor.method, AlbedoMethod::Linear);
+    assert_eq!(floor.blend, BlendRule::Floor);
+    let small = zoomed([0.137, -0.291], 100.0);
+    let floor = model.albedo_map(24, 24, small, None, &NoProgress).unwrap();
+    assert!(
+        matches!(floor.method, AlbedoMethod::Field { .. }),
+        "{:?}",
+        floor.method
+    );
+    let worst = worst_error(&model, &floor, &random_pixels(24, 12, 5));
+    assert!(worst <= 0.01, "{worst}");
 }
 
 #[test]

@@ -2,8 +2,8 @@
 
 use std::path::{Path, PathBuf};
 
+use brdf_atlas_core::{BlendRule, GplvmParams, Model, NoProgress, Precision, TransformKind};
 use brdf_atlas_core::{FitOptions, Rows, fit_dir};
-use brdf_atlas_core::{GplvmParams, Model, NoProgress, Precision, TransformKind};
 use brdf_merl::synth::{self, Analytic, database};
 use brdf_merl::{Dims, INVALID, MerlFile, MerlTable, Quadrature};
 use faer::Mat;
@@ -231,7 +231,9 @@ fn linear_map_equals_quadrature_of_the_reconstruction() {
     let m = Model::open(fit(tmp.path(), TransformKind::Raw, Precision::F64)).unwrap();
     let view = brdf_atlas_core::View::default();
     let (w, h) = (16, 12);
-    let map = m.albedo_map(w, h, view, None, &NoProgress).unwrap();
+    // The GP's material: the soft floor (the default) is not linear.
+    let gp = |samples| m.albedo_map_with(w, h, view, samples, BlendRule::Gp, &NoProgress);
+    let map = gp(None).unwrap();
     let rule = Quadrature::dense(DIMS, 2);
     let bins = DIMS.bins();
     for &(px, py) in &[(0usize, 0usize), (5, 7), (15, 11), (8, 3)] {
@@ -260,10 +262,8 @@ fn linear_map_equals_quadrature_of_the_reconstruction() {
     }
     // The per-pixel quadrature path integrates the clamped reconstruction
     // (what a saved table holds) and converges to it as samples grow.
-    let fine = m
-        .albedo_map(w, h, view, Some(200_000), &NoProgress)
-        .unwrap();
-    let coarse = m.albedo_map(w, h, view, Some(500), &NoProgress).unwrap();
+    let fine = gp(Some(200_000)).unwrap();
+    let coarse = gp(Some(500)).unwrap();
     let (mut err_fine, mut err_coarse) = (0.0f64, 0.0f64);
     for &(px, py) in &[(2usize, 2usize), (9, 6), (14, 10)] {
         let b = m

@@ -235,7 +235,7 @@ pub fn measure(
         steps.say("albedo map: size vs time")?;
         map_sizes(log_model, raw_model, plan, r)?;
         steps.say(&format!(
-            "plausibility at {0} x {0} points of the map, each model, both blend rules",
+            "plausibility at {0} x {0} points of the map, each model, every blend rule",
             plan.plausibility_grid
         ))?;
         super::plausible::measure(
@@ -586,6 +586,7 @@ fn map_samples(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error>
             reference_albedo(
                 model,
                 &view.pixel_to_latent(px as f64, py as f64, w, w),
+                BlendRule::default(),
                 &dense,
             )
         })
@@ -637,7 +638,7 @@ fn map_methods(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error>
             .iter()
             .map(|&(px, py)| {
                 let x = view.pixel_to_latent(px as f64, py as f64, size, size);
-                reference_albedo(model, &x, model.albedo_rule())
+                reference_albedo(model, &x, BlendRule::default(), model.albedo_rule())
             })
             .collect::<Result<Vec<_>, _>>()?;
         for samples in [None, Some(DEFAULT_SAMPLES)] {

@@ -1,8 +1,7 @@
 //! The report's plausibility section: at a grid of latent points of each
 //! transform's q = 2 model, how much reflectance the clamp to `>= 0` removes,
-//! the largest directional albedo, and the confidence, under the GP's
-//! weights and under the plausible rule; and the leave-one-out cost of the
-//! rule. A table in report.md, `plausibility.csv`, and `plausibility.png`.
+//! the largest directional albedo, and the confidence, under each blend
+//! rule ([`RULES`]); and the leave-one-out cost of each. A table in report.md, `plausibility.csv`, and `plausibility.png`.
 
 use std::io::{self, Write};
 use std::path::Path;
@@ -32,11 +31,12 @@ pub fn markdown(w: &mut dyn Write, r: &Results) -> io::Result<()> {
         w,
         "![Clamped share of reflectance over the map](plausibility.png)\n\n\
          At the centres of a grid over the map's default view, each point's material \
-         is reconstructed with the GP's weights (`gp`, the default) and with the \
-         plausible rule (`--blend plausible`: in each theta_h bin of the table where \
-         the clamp would remove more than 0.05% of that bin's reflectance, the GP's \
-         weights moved towards a convex blend of the materials just far enough that it \
-         does not). **Clamped**: the share of the cosine-weighted reflectance \
+         is reconstructed with the soft floor (`floor`, the default: the GP's blend with \
+         each value lifted softly onto a floor at 0.3 times a convex blend's), with the \
+         GP's weights as they are (`--blend gp`) and with the plausible rule (`--blend \
+         plausible`: in each theta_h bin of the table where the clamp would remove more \
+         than 0.05% of that bin's reflectance, the GP's weights moved towards a convex \
+         blend of the materials just far enough that it does not). **Clamped**: the share of the cosine-weighted reflectance \
          that the clamp to >= 0 removes. **Albedo**: the largest directional albedo \
          (at most 1 for a physical material). **Low confidence**: predictive variance \
          above 0.5. The picture shows the clamped share per grid cell (log scale, white \
@@ -48,7 +48,7 @@ pub fn markdown(w: &mut dyn Write, r: &Results) -> io::Result<()> {
     )?;
     writeln!(w, "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|")?;
     for (t, kernel) in MODELS {
-        for rule in [BlendRule::Gp, BlendRule::Plausible] {
+        for rule in RULES {
             let rows: Vec<&PlausibilityRow> = r
                 .plausibility
                 .iter()
@@ -165,6 +165,10 @@ pub fn markdown(w: &mut dyn Write, r: &Results) -> io::Result<()> {
     Ok(())
 }
 
+/// The blend rules of the plausibility grid, in the order of the table and
+/// of the picture's columns: the default first.
+const RULES: [BlendRule; 3] = [BlendRule::Floor, BlendRule::Gp, BlendRule::Plausible];
+
 /// The models of the plausibility grid: transform and kernel, in the order
 /// of the table and of the picture's rows.
 const MODELS: [(TransformKind, &str); 3] = [
@@ -183,7 +187,7 @@ fn grid_points(grid: usize) -> Vec<[f64; 2]> {
         .collect()
 }
 
-/// `model` (of `transform`) at the grid's points under both blend rules.
+/// `model` (of `transform`) at the grid's points under every blend rule.
 pub fn measure(
     model: &Model,
     transform: TransformKind,
@@ -191,7 +195,7 @@ pub fn measure(
     grid: usize,
     r: &mut Results,
 ) -> Result<(), Error> {
-    for rule in [BlendRule::Gp, BlendRule::Plausible] {
+    for rule in RULES {
         for x in grid_points(grid) {
             let blend = model.at_with(&x, rule)?;
             let p = blend.plausibility()?;
@@ -259,17 +263,20 @@ const GAP: usize = 8;
 
 /// `plausibility.png`: one panel per model (rows: log with the fixed
 /// kernel, log with the learned kernel, raw with the fixed kernel; a model
-/// not measured leaves its row blank) and rule (columns: gp, plausible),
+/// not measured leaves its row blank) and rule (columns: [`RULES`]),
 /// each cell grey by log10 of its clamped share.
 pub fn picture(dir: &Path, r: &Results, grid: usize) -> Result<(), Error> {
     if r.plausibility.is_empty() || grid == 0 {
         return Ok(());
     }
     let side = grid * CELL;
-    let (w, h) = (2 * side + 3 * GAP, MODELS.len() * (side + GAP) + GAP);
+    let (w, h) = (
+        RULES.len() * (side + GAP) + GAP,
+        MODELS.len() * (side + GAP) + GAP,
+    );
     let mut rgb = vec![255u8; w * h * 3];
     for (pi, (t, kernel)) in MODELS.iter().enumerate() {
-        for (ri, rule) in [BlendRule::Gp, BlendRule::Plausible].iter().enumerate() {
+        for (ri, rule) in RULES.iter().enumerate() {
             let rows: Vec<&PlausibilityRow> = r
                 .plausibility
                 .iter()

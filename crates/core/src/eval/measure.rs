@@ -6,12 +6,20 @@ use brdf_merl::Quadrature;
 
 use crate::error::Result;
 use crate::model::Model;
+use crate::query::BlendRule;
 use crate::query::map::AlbedoMap;
 
-/// Albedo of the reconstruction at `x`, integrated with `rule` over every
-/// bin it names (unmeasured bins count as 0). Slow: one full reconstruction.
-pub fn reference_albedo(model: &Model, x: &[f64], rule: &Quadrature) -> Result<[f64; 3]> {
-    let blend = model.at(x)?;
+/// Albedo of the reconstruction `blend` forms at `x`, integrated with
+/// `rule` over every bin it names (unmeasured bins count as 0, negative
+/// values as 0, as the table clamps them). Slow: every value one at a time
+/// through [`crate::Blend::value`], an independent path from the map's.
+pub fn reference_albedo(
+    model: &Model,
+    x: &[f64],
+    blend: BlendRule,
+    rule: &Quadrature,
+) -> Result<[f64; 3]> {
+    let blend = model.at_with(x, blend)?;
     let albedo = rule.integrate(|bin| [0, 1, 2].map(|c| blend.value(c, bin).unwrap_or(0.0)));
     model.verify()?;
     Ok(albedo)

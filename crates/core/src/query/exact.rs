@@ -99,14 +99,15 @@ impl Model {
         out
     }
 
-    /// The albedo of the full reconstruction at each point, integrated
-    /// with the dense rule ([`Model::albedo_rule`]; negative reconstructed
-    /// values count as 0, unmeasured bins are left out). One pass over the
-    /// store for all points: each block of rows is one product with the
-    /// points' weights `K^-1 k(x)`. The sums are formed in a fixed order:
-    /// the answer does not depend on the thread count.
+    /// The albedo of the full reconstruction of the default rule
+    /// ([`BlendRule::default`]) at each point, integrated with the dense
+    /// rule ([`Model::albedo_rule`]; negative reconstructed values count as
+    /// 0, unmeasured bins are left out). One pass over the store for all
+    /// points: each block of rows is one product with the points' weights
+    /// `K^-1 k(x)`. The sums are formed in a fixed order: the answer does
+    /// not depend on the thread count.
     pub fn exact_albedos(&self, points: &[[f64; 2]]) -> Result<Vec<[f64; 3]>> {
-        self.albedos_over(self.rule_rows(), points, false)
+        self.exact_albedos_with(points, BlendRule::default())
     }
 
     /// [`Model::exact_albedos`] of the material `rule` forms at each point:

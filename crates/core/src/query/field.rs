@@ -183,8 +183,9 @@ impl Model {
         out.into_iter().map(f64::from).collect()
     }
 
-    /// The field of `view`'s domain ([`domain_of`]), from the model's cache
-    /// or built and kept; `None` when its albedo needs more than `budget`
+    /// The field of `view`'s domain ([`domain_of`]) for the default rule's
+    /// material ([`BlendRule::default`]), from the model's cache or built
+    /// and kept; `None` when its albedo needs more than `budget`
     /// exact nodes (the map then integrates every pixel instead). A domain
     /// that failed is tried again only with a larger budget.
     pub fn albedo_field(&self, view: View, budget: usize) -> Result<Option<Arc<AlbedoField>>> {
@@ -200,7 +201,7 @@ impl Model {
         budget: usize,
         progress: &dyn Progress,
     ) -> Result<Option<Arc<AlbedoField>>> {
-        self.albedo_field_of(view, budget, BlendRule::Gp, progress)
+        self.albedo_field_of(view, budget, BlendRule::default(), progress)
     }
 
     /// [`Model::albedo_field_with`] of the material `rule` forms: the GP's

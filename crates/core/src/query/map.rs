@@ -180,10 +180,11 @@ impl Model {
         })
     }
 
-    /// The albedo map of a `width x height` image of `view`. `samples`:
-    /// `None` uses the linear shortcut for a linear transform and the albedo
-    /// field ([`Model::albedo_field`]) for any other, `Some(s)` integrates
-    /// each pixel with an `s`-point rule. Once `progress` is
+    /// The albedo map of a `width x height` image of `view`, of the default
+    /// rule's material ([`BlendRule::default`], the soft floor): what
+    /// `reconstruct` writes at each pixel's point. `samples`: `None` uses
+    /// the albedo field ([`Model::albedo_field`]) where it fits its budget,
+    /// `Some(s)` integrates each pixel with an `s`-point rule. Once `progress` is
     /// [cancelled](Progress::cancelled) (it must then stay so) the map stops
     /// within a row or a field refinement step and returns
     /// [`CoreError::Cancelled`].
@@ -195,13 +196,14 @@ impl Model {
         samples: Option<usize>,
         progress: &dyn Progress,
     ) -> Result<AlbedoMap> {
-        self.albedo_map_with(width, height, view, samples, BlendRule::Gp, progress)
+        self.albedo_map_with(width, height, view, samples, BlendRule::default(), progress)
     }
 
     /// [`Model::albedo_map`] of the material `rule` forms at each pixel: the
-    /// GP's blend, or the soft floor's ([`BlendRule::Floor`]; not linear in
-    /// the weights, so a raw-transform map of it takes the field or the
-    /// per-pixel rule too). The plausible rule has no map.
+    /// soft floor's ([`BlendRule::Floor`]; not linear in the weights, so even
+    /// a raw-transform map of it takes the field or the per-pixel rule) or
+    /// the GP's blend (`None` samples then uses the exact linear shortcut
+    /// for a linear transform). The plausible rule has no map.
     pub fn albedo_map_with(
         &self,
         width: usize,

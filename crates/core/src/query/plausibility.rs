@@ -40,7 +40,6 @@ pub enum BlendRule {
     /// The GP's mean: `w = K^-1 k(x)`, the paper's reconstruction. Between
     /// dissimilar materials its weights take mixed signs and the blend can
     /// go negative; the inverse transform then clamps it.
-    #[default]
     Gp,
     /// In each `theta_h` bin `b` of the table, `w' = w + t_b (v - w)`, `v`
     /// the convex weights of a narrower kernel
@@ -64,6 +63,9 @@ pub enum BlendRule {
     /// value is ever clamped, values well above the floor keep the GP's,
     /// and each value depends on the point's two weight vectors alone: no
     /// pass over the store, and the material varies smoothly over the map.
+    /// The default: what `reconstruct`, `eval`, the map and every binding
+    /// give unless asked for another rule.
+    #[default]
     Floor,
 }
 
