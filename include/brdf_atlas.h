@@ -97,8 +97,8 @@
 #define BRDF_ATLAS_MAX_SAMPLES (1 << 24)
 
 /**
- * The GPLVM's own weights `K^-1 k(x)` (the paper's reconstruction; what
- * `brdf_atlas_model_reconstruct` uses).
+ * The GPLVM's own weights `K^-1 k(x)` (the paper's reconstruction): where
+ * they take mixed signs the blend can go negative and is clamped to 0.
  */
 #define BRDF_ATLAS_BLEND_GP 0
 
@@ -114,7 +114,9 @@
 /**
  * The GP's blend with every value lifted softly onto a floor at 0.3 times
  * a kernel-weighted average of the materials (never negative; no extra
- * pass over the store).
+ * pass over the store). The library's default: what
+ * `brdf_atlas_model_reconstruct`, `brdf_atlas_model_eval` and
+ * `brdf_atlas_model_albedo_map` use.
  */
 #define BRDF_ATLAS_BLEND_FLOOR 2
 
@@ -397,6 +399,122 @@ enum BrdfAtlasStatus brdf_atlas_contours(const float *rgb,
                                          size_t *count);
 
 /**
+ * The albedo map of a `width` x `height` image of the latent window
+ * `view`: for every pixel, the linear RGB albedo of the material
+ * `brdf_atlas_model_reconstruct` gives at the pixel's centre (the default
+ * blend rule, the soft floor; `brdf_atlas_model_albedo_map_with` takes
+ * another). Row 0 is the top of the window
+ * (largest y); pixel (px, py) is at `buf[3 * (py * width + px) + c]`, c =
+ * 0, 1, 2 for red, green, blue.
+ *
+ * `view` NULL means the model's default window (`brdf_atlas_model_view`).
+ * `samples` is the quadrature sample count per pixel; 0 means the library
+ * default: the albedo field (exact albedos at nodes, a polynomial between
+ * them, within 0.25% by its estimate; kept by the model, so later maps of
+ * the same region are fast) where it costs less than 256 samples a pixel,
+ * which are used otherwise. (The GP's map of a model in the raw transform
+ * is exact instead: the per-material albedos blended.) At most `BRDF_ATLAS_MAX_SAMPLES`.
+ *
+ * Ownership: `model` and `view` are borrowed; `buf` is caller-owned, `len`
+ * floats (at least width * height * 3), written on success only.
+ *
+ * Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (zero size or more than
+ * `BRDF_ATLAS_MAX_MAP_SIDE` a side, view not finite or empty, too many samples), UNSUPPORTED
+ * (the model is not 2-D), BUFFER_TOO_SMALL.
+ *
+ * # Safety
+ * `model` is NULL or a live handle; `view` is NULL or valid for reading;
+ * `buf` is NULL or valid for writing `len` floats.
+ */
+enum BrdfAtlasStatus brdf_atlas_model_albedo_map(const struct BrdfAtlasModel *model,
+                                                 size_t width,
+                                                 size_t height,
+                                                 const struct BrdfAtlasView *view,
+                                                 size_t samples,
+                                                 float *buf,
+                                                 size_t len);
+
+/**
+ * `brdf_atlas_model_albedo_map` that its caller can cancel from another
+ * thread: the call reads `*cancel` now and then (atomically, relaxed
+ * order), and once it is non-zero stops within a map row or a step of the
+ * albedo field's refinement, writes nothing and returns CANCELLED. `cancel`
+ * is a `std::atomic<int32_t>` (C++) or `_Atomic int32_t` (C11) that stays
+ * alive for the call; set it to 1 and never back to 0 during the call. A
+ * viewer that moves on to another window cancels the stale map, so the
+ * cores are free for the new one at once.
+ *
+ * Returns what `brdf_atlas_model_albedo_map` returns, NULL_ARGUMENT when
+ * `cancel` is NULL, and CANCELLED.
+ *
+ * # Safety
+ * As `brdf_atlas_model_albedo_map`; `cancel` is NULL or points to an
+ * aligned 32-bit integer that every thread accesses only atomically while
+ * the call runs.
+ */
+enum BrdfAtlasStatus brdf_atlas_model_albedo_map_cancellable(const struct BrdfAtlasModel *model,
+                                                             size_t width,
+                                                             size_t height,
+                                                             const struct BrdfAtlasView *view,
+                                                             size_t samples,
+                                                             const int32_t *cancel,
+                                                             float *buf,
+                                                             size_t len);
+
+/**
+ * `brdf_atlas_model_albedo_map` of the material blend rule `blend` forms
+ * at each pixel: `BRDF_ATLAS_BLEND_FLOOR` (the default's map, the same
+ * bits) or `BRDF_ATLAS_BLEND_GP` (the GP's own blend, clamped to >= 0;
+ * exact for a model in the raw transform). `BRDF_ATLAS_BLEND_PLAUSIBLE`
+ * has no map: its steps need a pass over the store per point. `cancel` is
+ * NULL (the call cannot be cancelled) or a flag as in
+ * `brdf_atlas_model_albedo_map_cancellable`.
+ *
+ * Returns what `brdf_atlas_model_albedo_map_cancellable` returns, and
+ * INVALID_ARGUMENT for an unknown rule or the plausible rule.
+ *
+ * # Safety
+ * As `brdf_atlas_model_albedo_map_cancellable`, but `cancel` may be NULL.
+ */
+enum BrdfAtlasStatus brdf_atlas_model_albedo_map_with(const struct BrdfAtlasModel *model,
+                                                      size_t width,
+                                                      size_t height,
+                                                      const struct BrdfAtlasView *view,
+                                                      size_t samples,
+                                                      int32_t blend,
+                                                      const int32_t *cancel,
+                                                      float *buf,
+                                                      size_t len);
+
+/**
+ * The GP's predictive variance (`1 - k(x)^T K^-1 k(x)`: 0 at an input
+ * material, 1 where the data say nothing, above 0.5 the model knows
+ * little) at every pixel of a `width` x `height` image of `view`, laid out
+ * as `brdf_atlas_model_albedo_map` lays out its pixels, one float a pixel:
+ * pixel (px, py) is at `buf[py * width + px]`. A map picture fades where it
+ * is high. No pass over the store: much cheaper than the albedo map.
+ *
+ * `view` NULL means the model's default window.
+ *
+ * Ownership: `model` and `view` are borrowed; `buf` is caller-owned, `len`
+ * floats (at least width * height), written on success only.
+ *
+ * Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (zero size or more than
+ * `BRDF_ATLAS_MAX_MAP_SIDE` a side, view not finite or empty), UNSUPPORTED
+ * (the model is not 2-D), BUFFER_TOO_SMALL.
+ *
+ * # Safety
+ * `model` is NULL or a live handle; `view` is NULL or valid for reading;
+ * `buf` is NULL or valid for writing `len` floats.
+ */
+enum BrdfAtlasStatus brdf_atlas_model_variance_map(const struct BrdfAtlasModel *model,
+                                                   size_t width,
+                                                   size_t height,
+                                                   const struct BrdfAtlasView *view,
+                                                   float *buf,
+                                                   size_t len);
+
+/**
  * Open the model file at `path` (its store, `path` + ".store", beside it)
  * and check it: format, version, the store's size and checksum.
  *
@@ -582,7 +700,8 @@ enum BrdfAtlasStatus brdf_atlas_model_confidence(const struct BrdfAtlasModel *mo
 /**
  * Reconstruct the whole table at latent point (x, y) under blend rule
  * `blend`, as `brdf_atlas_model_reconstruct` does (same layout, units and
- * buffer rules); `BRDF_ATLAS_BLEND_GP` gives the same bits as it.
+ * buffer rules); `BRDF_ATLAS_BLEND_FLOOR` (the default) gives the same bits
+ * as it.
  *
  * Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (x or y NaN or infinite, an
  * unknown rule), UNSUPPORTED (the model is not 2-D), BUFFER_TOO_SMALL.
@@ -600,8 +719,10 @@ enum BrdfAtlasStatus brdf_atlas_model_reconstruct_with(const struct BrdfAtlasMod
                                                        size_t *written);
 
 /**
- * Reconstruct the whole table at latent point (x, y) into `buf`, in the
- * MERL layout and units: the red, green and blue blocks of `bins` doubles
+ * Reconstruct the whole table at latent point (x, y) into `buf`, under the
+ * library's default blend rule, the soft floor (`BRDF_ATLAS_BLEND_FLOOR`:
+ * the material the albedo map shows; `brdf_atlas_model_reconstruct_with`
+ * takes another rule), in the MERL layout and units: the red, green and blue blocks of `bins` doubles
  * each, each indexed `[theta_h][theta_d][phi_d]`, raw MERL values (a MERL
  * `.binary` file's data after its 12-byte header), -1 where no input
  * material was measured. `brdf_atlas_model_table_len` gives the length.
@@ -630,7 +751,8 @@ enum BrdfAtlasStatus brdf_atlas_model_reconstruct(const struct BrdfAtlasModel *m
                                                   size_t *written);
 
 /**
- * Reconstruct the table at latent point (x, y) and write it as a MERL
+ * Reconstruct the table at latent point (x, y) under the default blend
+ * rule (as `brdf_atlas_model_reconstruct`) and write it as a MERL
  * `.binary` file at `path`, atomically (a temporary file beside it, then a
  * rename: a failed call leaves no partial file). An existing file is
  * replaced.
@@ -650,8 +772,9 @@ enum BrdfAtlasStatus brdf_atlas_model_reconstruct_to_file(const struct BrdfAtlas
                                                           const char *path);
 
 /**
- * Evaluate the material at latent point (x, y) for one pair of directions:
- * RGB reflectance (1/sr, MERL's channel scales applied) of the nearest bin,
+ * Evaluate the material at latent point (x, y) (the default blend rule's,
+ * as `brdf_atlas_model_reconstruct`) for one pair of directions: RGB
+ * reflectance (1/sr, MERL's channel scales applied) of the nearest bin,
  * as MERL's own lookup does.
  *
  * `wi` and `wo` are 3 doubles each, in the surface frame (z is the
@@ -706,10 +829,11 @@ enum BrdfAtlasStatus brdf_atlas_model_eval_batch(const struct BrdfAtlasModel *mo
                                                  size_t len);
 
 /**
- * The N blend weights at latent point (x, y): every output of the model
- * there is the mean material plus this weighted sum of the N input
- * materials (in the model's transformed space). Weight i belongs to
- * material i.
+ * The N blend weights at latent point (x, y), the GP's `K^-1 k(x)`: the
+ * GP's blend there is the mean material plus this weighted sum of the N
+ * input materials (in the model's transformed space); the default rule,
+ * the soft floor, then lifts each value of it onto a floor at 0.3 times a
+ * kernel-weighted average's. Weight i belongs to material i.
  *
  * Ownership: `model` is borrowed; `buf` is caller-owned, `len` doubles (at
  * least N), written on success only.
@@ -728,97 +852,9 @@ enum BrdfAtlasStatus brdf_atlas_model_weights(const struct BrdfAtlasModel *model
                                               size_t len);
 
 /**
- * The albedo map of a `width` x `height` image of the latent window
- * `view`: for every pixel, the linear RGB albedo of the material
- * reconstructed at the pixel's centre. Row 0 is the top of the window
- * (largest y); pixel (px, py) is at `buf[3 * (py * width + px) + c]`, c =
- * 0, 1, 2 for red, green, blue.
- *
- * `view` NULL means the model's default window (`brdf_atlas_model_view`).
- * `samples` is the quadrature sample count per pixel; 0 means the library
- * default: exact (the per-material albedos blended) for a model in the raw
- * transform; otherwise the albedo field (exact albedos at nodes, a
- * polynomial between them, within 0.25% by its estimate; kept by the model,
- * so later maps of the same region are fast) where it costs less than 256
- * samples a pixel, which are used otherwise. At most `BRDF_ATLAS_MAX_SAMPLES`.
- *
- * Ownership: `model` and `view` are borrowed; `buf` is caller-owned, `len`
- * floats (at least width * height * 3), written on success only.
- *
- * Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (zero size or more than
- * `BRDF_ATLAS_MAX_MAP_SIDE` a side, view not finite or empty, too many samples), UNSUPPORTED
- * (the model is not 2-D), BUFFER_TOO_SMALL.
- *
- * # Safety
- * `model` is NULL or a live handle; `view` is NULL or valid for reading;
- * `buf` is NULL or valid for writing `len` floats.
- */
-enum BrdfAtlasStatus brdf_atlas_model_albedo_map(const struct BrdfAtlasModel *model,
-                                                 size_t width,
-                                                 size_t height,
-                                                 const struct BrdfAtlasView *view,
-                                                 size_t samples,
-                                                 float *buf,
-                                                 size_t len);
-
-/**
- * `brdf_atlas_model_albedo_map` that its caller can cancel from another
- * thread: the call reads `*cancel` now and then (atomically, relaxed
- * order), and once it is non-zero stops within a map row or a step of the
- * albedo field's refinement, writes nothing and returns CANCELLED. `cancel`
- * is a `std::atomic<int32_t>` (C++) or `_Atomic int32_t` (C11) that stays
- * alive for the call; set it to 1 and never back to 0 during the call. A
- * viewer that moves on to another window cancels the stale map, so the
- * cores are free for the new one at once.
- *
- * Returns what `brdf_atlas_model_albedo_map` returns, NULL_ARGUMENT when
- * `cancel` is NULL, and CANCELLED.
- *
- * # Safety
- * As `brdf_atlas_model_albedo_map`; `cancel` is NULL or points to an
- * aligned 32-bit integer that every thread accesses only atomically while
- * the call runs.
- */
-enum BrdfAtlasStatus brdf_atlas_model_albedo_map_cancellable(const struct BrdfAtlasModel *model,
-                                                             size_t width,
-                                                             size_t height,
-                                                             const struct BrdfAtlasView *view,
-                                                             size_t samples,
-                                                             const int32_t *cancel,
-                                                             float *buf,
-                                                             size_t len);
-
-/**
- * The GP's predictive variance (`1 - k(x)^T K^-1 k(x)`: 0 at an input
- * material, 1 where the data say nothing, above 0.5 the model knows
- * little) at every pixel of a `width` x `height` image of `view`, laid out
- * as `brdf_atlas_model_albedo_map` lays out its pixels, one float a pixel:
- * pixel (px, py) is at `buf[py * width + px]`. A map picture fades where it
- * is high. No pass over the store: much cheaper than the albedo map.
- *
- * `view` NULL means the model's default window.
- *
- * Ownership: `model` and `view` are borrowed; `buf` is caller-owned, `len`
- * floats (at least width * height), written on success only.
- *
- * Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (zero size or more than
- * `BRDF_ATLAS_MAX_MAP_SIDE` a side, view not finite or empty), UNSUPPORTED
- * (the model is not 2-D), BUFFER_TOO_SMALL.
- *
- * # Safety
- * `model` is NULL or a live handle; `view` is NULL or valid for reading;
- * `buf` is NULL or valid for writing `len` floats.
- */
-enum BrdfAtlasStatus brdf_atlas_model_variance_map(const struct BrdfAtlasModel *model,
-                                                   size_t width,
-                                                   size_t height,
-                                                   const struct BrdfAtlasView *view,
-                                                   float *buf,
-                                                   size_t len);
-
-/**
  * Find where the MERL file at `merl_path` lands in the model's latent
- * plane: the point whose reconstruction matches it best, searched over the
+ * plane: the point whose reconstruction (the GP's blend, what the latent
+ * space was fitted on) matches it best, searched over the
  * whole plane (it may lie outside the box [-1, 1]^2 the inputs were fitted
  * in, and outside the default view). The file must have the model's dims.
  *

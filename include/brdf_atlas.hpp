@@ -139,16 +139,18 @@ public:
         return len;
     }
 
-    /// The table at (x, y) in the MERL layout, raw MERL units (-1: unmeasured).
+    /// The table at (x, y) in the MERL layout, raw MERL units (-1: unmeasured),
+    /// under the library's default blend rule, the soft floor
+    /// (BRDF_ATLAS_BLEND_FLOOR: the material albedo_map() shows).
     std::vector<double> reconstruct(double x, double y) const {
         std::vector<double> table(table_len());
         reconstruct_into(x, y, table.data(), table.size());
         return table;
     }
 
-    /// The table at (x, y) under blend rule `blend` (BRDF_ATLAS_BLEND_GP,
-    /// as reconstruct(x, y); BRDF_ATLAS_BLEND_PLAUSIBLE: one more pass
-    /// over the store; BRDF_ATLAS_BLEND_FLOOR: never negative, no extra pass).
+    /// The table at (x, y) under blend rule `blend` (BRDF_ATLAS_BLEND_FLOOR,
+    /// as reconstruct(x, y); BRDF_ATLAS_BLEND_GP: the GP's own blend, clamped
+    /// to >= 0; BRDF_ATLAS_BLEND_PLAUSIBLE: one more pass over the store).
     std::vector<double> reconstruct(double x, double y, std::int32_t blend) const {
         std::vector<double> table(table_len());
         check(brdf_atlas_model_reconstruct_with(handle_, x, y, blend, table.data(), table.size(),
@@ -190,15 +192,15 @@ public:
         return rgb;
     }
 
-    /// The N blend weights at (x, y).
+    /// The GP's N blend weights at (x, y).
     std::vector<double> weights(double x, double y) const {
         std::vector<double> w(material_count());
         check(brdf_atlas_model_weights(handle_, x, y, w.data(), w.size()));
         return w;
     }
 
-    /// The albedo map: width * height RGB triples, row 0 at the top of `view`.
-    /// `samples` 0 is the library default.
+    /// The albedo map: width * height RGB triples, row 0 at the top of `view`,
+    /// of the material reconstruct() gives. `samples` 0 is the library default.
     std::vector<float> albedo_map(std::size_t width, std::size_t height, const View &view,
                                   std::size_t samples = 0) const {
         return map(width, height, &view, samples);
@@ -207,6 +209,21 @@ public:
     /// The albedo map of the default window.
     std::vector<float> albedo_map(std::size_t width, std::size_t height) const {
         return map(width, height, nullptr, 0);
+    }
+
+    /// The albedo map of blend rule `blend`'s material: BRDF_ATLAS_BLEND_FLOOR
+    /// (albedo_map()'s) or BRDF_ATLAS_BLEND_GP (the plausible rule has none).
+    std::vector<float> albedo_map_with(std::size_t width, std::size_t height, const View &view,
+                                       std::size_t samples, std::int32_t blend) const {
+        if (width == 0 || height == 0 || width > BRDF_ATLAS_MAX_MAP_SIDE ||
+            height > BRDF_ATLAS_MAX_MAP_SIDE) {
+            check(brdf_atlas_model_albedo_map_with(handle_, width, height, &view, samples, blend,
+                                                   nullptr, nullptr, 0));
+        }
+        std::vector<float> rgb(width * height * 3);
+        check(brdf_atlas_model_albedo_map_with(handle_, width, height, &view, samples, blend,
+                                               nullptr, rgb.data(), rgb.size()));
+        return rgb;
     }
 
     /// albedo_map() that another thread can cancel by setting `cancel` to 1
@@ -253,10 +270,10 @@ public:
     }
 
     /// How physical the material at (x, y) is under blend rule `blend`
-    /// (BRDF_ATLAS_BLEND_GP: the table reconstruct() gives) and what the
+    /// (BRDF_ATLAS_BLEND_FLOOR: the table reconstruct() gives) and what the
     /// model knows there. Reads the whole store once, as reconstruct() does.
     Plausibility plausibility(double x, double y,
-                              std::int32_t blend = BRDF_ATLAS_BLEND_GP) const {
+                              std::int32_t blend = BRDF_ATLAS_BLEND_FLOOR) const {
         Plausibility p{};
         check(brdf_atlas_model_plausibility(handle_, x, y, blend, &p));
         return p;

@@ -53,7 +53,7 @@ unsafe fn map_from(rgb: *const f32, width: usize, height: usize) -> Result<Albed
         // Contours read the albedo only.
         variance: vec![0.0; width * height],
         method: AlbedoMethod::Linear,
-        blend: BlendRule::Gp,
+        blend: BlendRule::default(),
     })
 }
 

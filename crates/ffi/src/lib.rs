@@ -44,6 +44,7 @@
 mod check;
 pub mod consts;
 pub mod contour;
+pub mod map;
 pub mod model;
 pub mod plausibility;
 pub mod query;
@@ -56,6 +57,10 @@ pub use consts::{
     BRDF_ATLAS_VERSION_PATCH,
 };
 pub use contour::{BrdfAtlasSegment, brdf_atlas_contour_levels, brdf_atlas_contours};
+pub use map::{
+    brdf_atlas_model_albedo_map, brdf_atlas_model_albedo_map_cancellable,
+    brdf_atlas_model_albedo_map_with, brdf_atlas_model_variance_map,
+};
 pub use model::{
     BrdfAtlasDims, BrdfAtlasModel, BrdfAtlasView, brdf_atlas_model_dims, brdf_atlas_model_free,
     brdf_atlas_model_latent_dim, brdf_atlas_model_latent_point, brdf_atlas_model_material_count,
@@ -67,10 +72,8 @@ pub use plausibility::{
     brdf_atlas_model_confidence, brdf_atlas_model_plausibility, brdf_atlas_model_reconstruct_with,
 };
 pub use query::{
-    BrdfAtlasLocation, brdf_atlas_model_albedo_map, brdf_atlas_model_albedo_map_cancellable,
-    brdf_atlas_model_eval, brdf_atlas_model_eval_batch, brdf_atlas_model_locate,
-    brdf_atlas_model_reconstruct, brdf_atlas_model_reconstruct_to_file,
-    brdf_atlas_model_variance_map, brdf_atlas_model_weights,
+    BrdfAtlasLocation, brdf_atlas_model_eval, brdf_atlas_model_eval_batch, brdf_atlas_model_locate,
+    brdf_atlas_model_reconstruct, brdf_atlas_model_reconstruct_to_file, brdf_atlas_model_weights,
 };
 pub use status::{
     BrdfAtlasStatus, brdf_atlas_last_error_message, brdf_atlas_status_message, brdf_atlas_version,

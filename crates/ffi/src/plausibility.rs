@@ -7,8 +7,8 @@ use crate::check;
 use crate::model::{self as handle, BrdfAtlasModel};
 use crate::status::{BrdfAtlasStatus, Failure, Result, run};
 
-/// The GPLVM's own weights `K^-1 k(x)` (the paper's reconstruction; what
-/// `brdf_atlas_model_reconstruct` uses).
+/// The GPLVM's own weights `K^-1 k(x)` (the paper's reconstruction): where
+/// they take mixed signs the blend can go negative and is clamped to 0.
 pub const BRDF_ATLAS_BLEND_GP: i32 = 0;
 /// The GP's weights moved towards a kernel-weighted average of the materials,
 /// in each theta_h bin of the table just far enough that the clamp to >= 0
@@ -18,7 +18,9 @@ pub const BRDF_ATLAS_BLEND_GP: i32 = 0;
 pub const BRDF_ATLAS_BLEND_PLAUSIBLE: i32 = 1;
 /// The GP's blend with every value lifted softly onto a floor at 0.3 times
 /// a kernel-weighted average of the materials (never negative; no extra
-/// pass over the store).
+/// pass over the store). The library's default: what
+/// `brdf_atlas_model_reconstruct`, `brdf_atlas_model_eval` and
+/// `brdf_atlas_model_albedo_map` use.
 pub const BRDF_ATLAS_BLEND_FLOOR: i32 = 2;
 
 /// What the model knows at a latent point and how physical its material is.
@@ -47,7 +49,7 @@ pub struct BrdfAtlasPlausibility {
 }
 
 /// The blend rule of a C constant.
-fn rule(value: i32) -> Result<BlendRule> {
+pub(crate) fn rule(value: i32) -> Result<BlendRule> {
     match value {
         BRDF_ATLAS_BLEND_GP => Ok(BlendRule::Gp),
         BRDF_ATLAS_BLEND_PLAUSIBLE => Ok(BlendRule::Plausible),
@@ -139,7 +141,8 @@ pub unsafe extern "C" fn brdf_atlas_model_confidence(
 
 /// Reconstruct the whole table at latent point (x, y) under blend rule
 /// `blend`, as `brdf_atlas_model_reconstruct` does (same layout, units and
-/// buffer rules); `BRDF_ATLAS_BLEND_GP` gives the same bits as it.
+/// buffer rules); `BRDF_ATLAS_BLEND_FLOOR` (the default) gives the same bits
+/// as it.
 ///
 /// Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (x or y NaN or infinite, an
 /// unknown rule), UNSUPPORTED (the model is not 2-D), BUFFER_TOO_SMALL.

@@ -1,17 +1,14 @@
 //! What a model answers at a latent point: the full table, point
-//! evaluations, the blend weights; the albedo map; where a MERL file lands.
+//! evaluations, the blend weights; where a MERL file lands.
 
 use std::ffi::c_char;
-use std::sync::atomic::{AtomicI32, Ordering};
 
-use brdf_atlas_core::View;
-use brdf_atlas_core::{NoProgress, Progress};
+use brdf_atlas_core::BlendRule;
 use brdf_merl::{MerlFile, Vec3};
 
 use crate::check;
-use crate::consts::{BRDF_ATLAS_MAX_MAP_SIDE, BRDF_ATLAS_MAX_SAMPLES};
-use crate::model::{self as handle, BrdfAtlasModel, BrdfAtlasView};
-use crate::status::{BrdfAtlasStatus, Failure, Result, run};
+use crate::model::{self as handle, BrdfAtlasModel};
+use crate::status::{BrdfAtlasStatus, Failure, run};
 
 /// Where a MERL file lands in a model's latent plane.
 #[repr(C)]
@@ -31,8 +28,10 @@ pub struct BrdfAtlasLocation {
     pub nearest: usize,
 }
 
-/// Reconstruct the whole table at latent point (x, y) into `buf`, in the
-/// MERL layout and units: the red, green and blue blocks of `bins` doubles
+/// Reconstruct the whole table at latent point (x, y) into `buf`, under the
+/// library's default blend rule, the soft floor (`BRDF_ATLAS_BLEND_FLOOR`:
+/// the material the albedo map shows; `brdf_atlas_model_reconstruct_with`
+/// takes another rule), in the MERL layout and units: the red, green and blue blocks of `bins` doubles
 /// each, each indexed `[theta_h][theta_d][phi_d]`, raw MERL values (a MERL
 /// `.binary` file's data after its 12-byte header), -1 where no input
 /// material was measured. `brdf_atlas_model_table_len` gives the length.
@@ -66,7 +65,7 @@ pub unsafe extern "C" fn brdf_atlas_model_reconstruct(
         let p = check::point(m, x, y)?;
         let out = unsafe { check::buffer(buf, len, m.dims().values(), "buf") }?;
         let written = unsafe { check::optional_out(written, "written") }?;
-        let table = m.at(&p)?.table()?;
+        let table = m.at_with(&p, BlendRule::default())?.table()?;
         out.copy_from_slice(table.raw());
         if let Some(w) = written {
             *w = out.len();
@@ -75,7 +74,8 @@ pub unsafe extern "C" fn brdf_atlas_model_reconstruct(
     })
 }
 
-/// Reconstruct the table at latent point (x, y) and write it as a MERL
+/// Reconstruct the table at latent point (x, y) under the default blend
+/// rule (as `brdf_atlas_model_reconstruct`) and write it as a MERL
 /// `.binary` file at `path`, atomically (a temporary file beside it, then a
 /// rename: a failed call leaves no partial file). An existing file is
 /// replaced.
@@ -99,7 +99,7 @@ pub unsafe extern "C" fn brdf_atlas_model_reconstruct_to_file(
         let m = unsafe { handle::borrow(model) }?;
         let path = unsafe { check::path(path, "path") }?;
         let p = check::point(m, x, y)?;
-        m.at(&p)?.table()?.write(path)?;
+        m.at_with(&p, BlendRule::default())?.table()?.write(path)?;
         Ok(())
     })
 }
@@ -110,8 +110,9 @@ fn eval_one(blend: &brdf_atlas_core::Blend<'_>, wi: &[f64], wo: &[f64]) -> [f64;
     blend.eval(v(wi), v(wo)).unwrap_or([f64::NAN; 3])
 }
 
-/// Evaluate the material at latent point (x, y) for one pair of directions:
-/// RGB reflectance (1/sr, MERL's channel scales applied) of the nearest bin,
+/// Evaluate the material at latent point (x, y) (the default blend rule's,
+/// as `brdf_atlas_model_reconstruct`) for one pair of directions: RGB
+/// reflectance (1/sr, MERL's channel scales applied) of the nearest bin,
 /// as MERL's own lookup does.
 ///
 /// `wi` and `wo` are 3 doubles each, in the surface frame (z is the
@@ -144,7 +145,7 @@ pub unsafe extern "C" fn brdf_atlas_model_eval(
         let wo = unsafe { check::input(wo, 3, "wo") }?;
         let out = unsafe { check::buffer(rgb, 3, 3, "rgb") }?;
         let p = check::point(m, x, y)?;
-        let blend = m.at(&p)?;
+        let blend = m.at_with(&p, BlendRule::default())?;
         let rgb = eval_one(&blend, wi, wo);
         m.verify()?;
         out.copy_from_slice(&rgb);
@@ -191,7 +192,7 @@ pub unsafe extern "C" fn brdf_atlas_model_eval_batch(
         }
         let out = unsafe { check::buffer(rgb, len, values, "rgb") }?;
         let p = check::point(m, x, y)?;
-        let blend = m.at(&p)?;
+        let blend = m.at_with(&p, BlendRule::default())?;
         // Computed in full before the caller's buffer is touched.
         let mut result = Vec::new();
         result.try_reserve_exact(values).map_err(|_| {
@@ -209,10 +210,11 @@ pub unsafe extern "C" fn brdf_atlas_model_eval_batch(
     })
 }
 
-/// The N blend weights at latent point (x, y): every output of the model
-/// there is the mean material plus this weighted sum of the N input
-/// materials (in the model's transformed space). Weight i belongs to
-/// material i.
+/// The N blend weights at latent point (x, y), the GP's `K^-1 k(x)`: the
+/// GP's blend there is the mean material plus this weighted sum of the N
+/// input materials (in the model's transformed space); the default rule,
+/// the soft floor, then lifts each value of it onto a floor at 0.3 times a
+/// kernel-weighted average's. Weight i belongs to material i.
 ///
 /// Ownership: `model` is borrowed; `buf` is caller-owned, `len` doubles (at
 /// least N), written on success only.
@@ -241,207 +243,9 @@ pub unsafe extern "C" fn brdf_atlas_model_weights(
     })
 }
 
-/// The samples a map uses: 0 means none (the library's default: the exact
-/// linear shortcut for a linear transform, the albedo field otherwise).
-fn map_samples(samples: usize) -> Result<Option<usize>> {
-    if samples > BRDF_ATLAS_MAX_SAMPLES {
-        return Err(Failure::invalid(format!(
-            "{samples} quadrature samples, at most {BRDF_ATLAS_MAX_SAMPLES} are accepted"
-        )));
-    }
-    Ok(match samples {
-        0 => None,
-        s => Some(s),
-    })
-}
-
-/// The albedo map of a `width` x `height` image of the latent window
-/// `view`: for every pixel, the linear RGB albedo of the material
-/// reconstructed at the pixel's centre. Row 0 is the top of the window
-/// (largest y); pixel (px, py) is at `buf[3 * (py * width + px) + c]`, c =
-/// 0, 1, 2 for red, green, blue.
-///
-/// `view` NULL means the model's default window (`brdf_atlas_model_view`).
-/// `samples` is the quadrature sample count per pixel; 0 means the library
-/// default: exact (the per-material albedos blended) for a model in the raw
-/// transform; otherwise the albedo field (exact albedos at nodes, a
-/// polynomial between them, within 0.25% by its estimate; kept by the model,
-/// so later maps of the same region are fast) where it costs less than 256
-/// samples a pixel, which are used otherwise. At most `BRDF_ATLAS_MAX_SAMPLES`.
-///
-/// Ownership: `model` and `view` are borrowed; `buf` is caller-owned, `len`
-/// floats (at least width * height * 3), written on success only.
-///
-/// Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (zero size or more than
-/// `BRDF_ATLAS_MAX_MAP_SIDE` a side, view not finite or empty, too many samples), UNSUPPORTED
-/// (the model is not 2-D), BUFFER_TOO_SMALL.
-///
-/// # Safety
-/// `model` is NULL or a live handle; `view` is NULL or valid for reading;
-/// `buf` is NULL or valid for writing `len` floats.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn brdf_atlas_model_albedo_map(
-    model: *const BrdfAtlasModel,
-    width: usize,
-    height: usize,
-    view: *const BrdfAtlasView,
-    samples: usize,
-    buf: *mut f32,
-    len: usize,
-) -> BrdfAtlasStatus {
-    run("brdf_atlas_model_albedo_map", || unsafe {
-        albedo_map(model, width, height, view, samples, &NoProgress, buf, len)
-    })
-}
-
-/// `brdf_atlas_model_albedo_map` that its caller can cancel from another
-/// thread: the call reads `*cancel` now and then (atomically, relaxed
-/// order), and once it is non-zero stops within a map row or a step of the
-/// albedo field's refinement, writes nothing and returns CANCELLED. `cancel`
-/// is a `std::atomic<int32_t>` (C++) or `_Atomic int32_t` (C11) that stays
-/// alive for the call; set it to 1 and never back to 0 during the call. A
-/// viewer that moves on to another window cancels the stale map, so the
-/// cores are free for the new one at once.
-///
-/// Returns what `brdf_atlas_model_albedo_map` returns, NULL_ARGUMENT when
-/// `cancel` is NULL, and CANCELLED.
-///
-/// # Safety
-/// As `brdf_atlas_model_albedo_map`; `cancel` is NULL or points to an
-/// aligned 32-bit integer that every thread accesses only atomically while
-/// the call runs.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn brdf_atlas_model_albedo_map_cancellable(
-    model: *const BrdfAtlasModel,
-    width: usize,
-    height: usize,
-    view: *const BrdfAtlasView,
-    samples: usize,
-    cancel: *const i32,
-    buf: *mut f32,
-    len: usize,
-) -> BrdfAtlasStatus {
-    run("brdf_atlas_model_albedo_map_cancellable", || {
-        if cancel.is_null() {
-            return Err(Failure::new(
-                BrdfAtlasStatus::NullArgument,
-                "cancel is NULL",
-            ));
-        }
-        if !cancel.cast::<AtomicI32>().is_aligned() {
-            return Err(Failure::invalid("cancel is not aligned to 4 bytes"));
-        }
-        // SAFETY: non-NULL and aligned (checked above); the caller keeps it
-        // alive for the call and accesses it only atomically.
-        let flag = CancelFlag(unsafe { AtomicI32::from_ptr(cancel.cast_mut()) });
-        unsafe { albedo_map(model, width, height, view, samples, &flag, buf, len) }
-    })
-}
-
-/// A caller's cancel flag as the core's [`Progress`].
-struct CancelFlag<'a>(&'a AtomicI32);
-
-impl Progress for CancelFlag<'_> {
-    fn cancelled(&self) -> bool {
-        self.0.load(Ordering::Relaxed) != 0
-    }
-}
-
-/// The body of both albedo map entry points.
-///
-/// # Safety
-/// As `brdf_atlas_model_albedo_map`.
-#[allow(clippy::too_many_arguments)]
-unsafe fn albedo_map(
-    model: *const BrdfAtlasModel,
-    width: usize,
-    height: usize,
-    view: *const BrdfAtlasView,
-    samples: usize,
-    progress: &dyn Progress,
-    buf: *mut f32,
-    len: usize,
-) -> Result<(), Failure> {
-    let m = unsafe { handle::borrow(model) }?;
-    check::planar(m)?;
-    let view = unsafe { map_window(view, width, height) }?;
-    let values = check::product(&[width, height, 3], "map size")?;
-    let out = unsafe { check::buffer(buf, len, values, "buf") }?;
-    let samples = map_samples(samples)?;
-    let map = m.albedo_map(width, height, view, samples, progress)?;
-    for (o, c) in out.chunks_exact_mut(3).zip(&map.rgb) {
-        o.copy_from_slice(c);
-    }
-    Ok(())
-}
-
-/// The window of a map request (`view` NULL: the default one), checked with
-/// the map's size.
-///
-/// # Safety
-/// `view` is NULL or valid for reading one `BrdfAtlasView`.
-unsafe fn map_window(
-    view: *const BrdfAtlasView,
-    width: usize,
-    height: usize,
-) -> Result<View, Failure> {
-    let view: View = match unsafe { check::input(view, 1, "view") } {
-        Ok(v) => v[0].into(),
-        Err(f) if f.status == BrdfAtlasStatus::NullArgument => View::default(),
-        Err(f) => return Err(f),
-    };
-    view.check()?;
-    let max = BRDF_ATLAS_MAX_MAP_SIDE;
-    if width == 0 || height == 0 || width > max || height > max {
-        return Err(Failure::invalid(format!(
-            "map size {width}x{height} must be between 1 and {max} a side"
-        )));
-    }
-    Ok(view)
-}
-
-/// The GP's predictive variance (`1 - k(x)^T K^-1 k(x)`: 0 at an input
-/// material, 1 where the data say nothing, above 0.5 the model knows
-/// little) at every pixel of a `width` x `height` image of `view`, laid out
-/// as `brdf_atlas_model_albedo_map` lays out its pixels, one float a pixel:
-/// pixel (px, py) is at `buf[py * width + px]`. A map picture fades where it
-/// is high. No pass over the store: much cheaper than the albedo map.
-///
-/// `view` NULL means the model's default window.
-///
-/// Ownership: `model` and `view` are borrowed; `buf` is caller-owned, `len`
-/// floats (at least width * height), written on success only.
-///
-/// Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (zero size or more than
-/// `BRDF_ATLAS_MAX_MAP_SIDE` a side, view not finite or empty), UNSUPPORTED
-/// (the model is not 2-D), BUFFER_TOO_SMALL.
-///
-/// # Safety
-/// `model` is NULL or a live handle; `view` is NULL or valid for reading;
-/// `buf` is NULL or valid for writing `len` floats.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn brdf_atlas_model_variance_map(
-    model: *const BrdfAtlasModel,
-    width: usize,
-    height: usize,
-    view: *const BrdfAtlasView,
-    buf: *mut f32,
-    len: usize,
-) -> BrdfAtlasStatus {
-    run("brdf_atlas_model_variance_map", || {
-        let m = unsafe { handle::borrow(model) }?;
-        check::planar(m)?;
-        let view = unsafe { map_window(view, width, height) }?;
-        let values = check::product(&[width, height], "map size")?;
-        let out = unsafe { check::buffer(buf, len, values, "buf") }?;
-        out.copy_from_slice(&m.variance_map(width, height, view)?);
-        m.verify()?;
-        Ok(())
-    })
-}
-
 /// Find where the MERL file at `merl_path` lands in the model's latent
-/// plane: the point whose reconstruction matches it best, searched over the
+/// plane: the point whose reconstruction (the GP's blend, what the latent
+/// space was fitted on) matches it best, searched over the
 /// whole plane (it may lie outside the box [-1, 1]^2 the inputs were fitted
 /// in, and outside the default view). The file must have the model's dims.
 ///

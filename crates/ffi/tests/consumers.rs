@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;
 
-use brdf_atlas_core::View;
+use brdf_atlas_core::{BlendRule, View};
 use brdf_atlas_core::{FitOptions, fit_dir, store_path_for};
 use brdf_atlas_core::{GplvmParams, Model, NoProgress, Precision, TransformKind};
 use brdf_atlas_hostile::{merl_cases, model_cases};
@@ -152,14 +152,24 @@ fn build_fixture() -> Fixture {
     }
     for (k, p) in POINTS.iter().enumerate() {
         let file = dir.join(format!("point{k}.binary"));
-        m.at(p).unwrap().table().unwrap().write(&file).unwrap();
+        m.at_with(p, BlendRule::default())
+            .unwrap()
+            .table()
+            .unwrap()
+            .write(&file)
+            .unwrap();
         line(&mut e, "point", p, Some(&file));
     }
     let far = [1e6, -1e300];
     let file = dir.join("far.binary");
-    m.at(&far).unwrap().table().unwrap().write(&file).unwrap();
+    m.at_with(&far, BlendRule::default())
+        .unwrap()
+        .table()
+        .unwrap()
+        .write(&file)
+        .unwrap();
     line(&mut e, "far", &far, Some(&file));
-    let blend = m.at(&POINTS[0]).unwrap();
+    let blend = m.at_with(&POINTS[0], BlendRule::default()).unwrap();
     line(&mut e, "weights", blend.weights(), None);
     let pairs: [(Vec3, Vec3); 8] = [
         (direction(0.3, 0.0), direction(0.5, 2.0)),
@@ -365,7 +375,7 @@ fn readme_example_writes_the_reconstruction() {
     assert!(stdout.contains("wrote"), "{stdout}");
     let m = Model::open(&f.model).unwrap();
     let want = f.dir.join("out/readme-rust.binary");
-    m.at(&[x, y])
+    m.at_with(&[x, y], BlendRule::default())
         .unwrap()
         .table()
         .unwrap()

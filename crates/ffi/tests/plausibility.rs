@@ -78,21 +78,22 @@ fn plausibility_confidence_and_rules_are_the_core_library_s() {
         let c = model.at(&[x, y]).unwrap().confidence();
         assert_eq!((v, w), (c.variance, c.weight_sum));
     }
-    // The GP rule gives the bits of the plain reconstruction.
-    let (mut a, mut b) = (vec![0.0f64; len], vec![1.0f64; len]);
-    unsafe {
-        brdf_atlas_model_reconstruct(h, 0.4, 0.1, a.as_mut_ptr(), len, null_mut());
-        brdf_atlas_model_reconstruct_with(
-            h,
-            0.4,
-            0.1,
-            BRDF_ATLAS_BLEND_GP,
-            b.as_mut_ptr(),
-            len,
-            null_mut(),
-        );
-    }
-    assert_eq!(a, b);
+    // The floor rule (the default) gives the bits of the plain
+    // reconstruction; here the GP's differ.
+    let with = |rule: i32| {
+        let mut b = vec![1.0f64; len];
+        let status = unsafe {
+            brdf_atlas_model_reconstruct_with(h, 0.4, 0.1, rule, b.as_mut_ptr(), len, null_mut())
+        };
+        assert_eq!(status, BrdfAtlasStatus::Ok);
+        b
+    };
+    let mut a = vec![0.0f64; len];
+    let status =
+        unsafe { brdf_atlas_model_reconstruct(h, 0.4, 0.1, a.as_mut_ptr(), len, null_mut()) };
+    assert_eq!(status, BrdfAtlasStatus::Ok);
+    assert_eq!(a, with(BRDF_ATLAS_BLEND_FLOOR));
+    assert_ne!(a, with(BRDF_ATLAS_BLEND_GP));
     // An unknown rule is refused with its message.
     let mut out = std::mem::MaybeUninit::<BrdfAtlasPlausibility>::zeroed();
     let status = unsafe { brdf_atlas_model_plausibility(h, 0.0, 0.0, 7, out.as_mut_ptr()) };
@@ -101,5 +102,70 @@ fn plausibility_confidence_and_rules_are_the_core_library_s() {
         .to_string_lossy()
         .into_owned();
     assert!(msg.contains("blend rule 7"), "{msg}");
+    unsafe { brdf_atlas_model_free(h) };
+}
+
+#[test]
+fn the_map_of_a_chosen_rule_is_the_core_library_s() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    synth::write_dir(&data, 7, Dims::new(8, 8, 16).unwrap(), 6).unwrap();
+    let path = tmp.path().join("m.atlas");
+    let options = FitOptions {
+        params: GplvmParams::new(2).check().unwrap(),
+        transform: TransformKind::Raw,
+        precision: Precision::F64,
+    };
+    fit_dir(&data, &path, &options, &NoProgress).unwrap();
+    let model = Model::open(&path).unwrap();
+    let h = open(&path);
+    let (w, ht) = (11, 9);
+    let view = brdf_atlas_core::View::default();
+    let map = |rule: i32, cancel: *const i32| {
+        let mut rgb = vec![-1.0f32; w * ht * 3];
+        let status = unsafe {
+            let (buf, len) = (rgb.as_mut_ptr(), rgb.len());
+            brdf_atlas_model_albedo_map_with(h, w, ht, std::ptr::null(), 0, rule, cancel, buf, len)
+        };
+        (status, rgb)
+    };
+    let core = |rule| -> Vec<f32> {
+        let m = model.albedo_map_with(w, ht, view, None, rule, &NoProgress);
+        m.unwrap().rgb.into_iter().flatten().collect()
+    };
+    // The floor's map is the default one, bit for bit; the GP's map of a
+    // raw model is its exact linear one.
+    let mut plain = vec![0.0f32; w * ht * 3];
+    let status = unsafe {
+        let (buf, len) = (plain.as_mut_ptr(), plain.len());
+        brdf_atlas_model_albedo_map(h, w, ht, std::ptr::null(), 0, buf, len)
+    };
+    assert_eq!(status, BrdfAtlasStatus::Ok);
+    let none = std::ptr::null();
+    assert_eq!(
+        map(BRDF_ATLAS_BLEND_FLOOR, none),
+        (BrdfAtlasStatus::Ok, plain.clone())
+    );
+    assert_eq!(plain, core(BlendRule::Floor));
+    let (status, gp) = map(BRDF_ATLAS_BLEND_GP, none);
+    assert_eq!(status, BrdfAtlasStatus::Ok);
+    assert_eq!(gp, core(BlendRule::Gp));
+    assert_ne!(gp, plain);
+    // A raised flag cancels it and writes nothing.
+    let flag = 1i32;
+    let (status, rgb) = map(BRDF_ATLAS_BLEND_GP, &flag);
+    assert_eq!(status, BrdfAtlasStatus::Cancelled);
+    assert!(rgb.iter().all(|&v| v == -1.0));
+    // The plausible rule has no map; an unknown rule is refused.
+    for (rule, words) in [
+        (BRDF_ATLAS_BLEND_PLAUSIBLE, "has no map"),
+        (9, "blend rule 9"),
+    ] {
+        let (status, rgb) = map(rule, none);
+        assert_eq!(status, BrdfAtlasStatus::InvalidArgument);
+        assert!(rgb.iter().all(|&v| v == -1.0));
+        let msg = unsafe { CStr::from_ptr(brdf_atlas_last_error_message()) };
+        assert!(msg.to_string_lossy().contains(words), "{msg:?}");
+    }
     unsafe { brdf_atlas_model_free(h) };
 }

@@ -181,7 +181,7 @@ void check_model(const brdf_atlas::Model &model) {
 
     // Plausibility: what the C call gives, field for field; bad calls throw.
     BrdfAtlasPlausibility want_p{};
-    CHECK(brdf_atlas_model_plausibility(model.get(), x, y, BRDF_ATLAS_BLEND_GP, &want_p) ==
+    CHECK(brdf_atlas_model_plausibility(model.get(), x, y, BRDF_ATLAS_BLEND_FLOOR, &want_p) ==
               BRDF_ATLAS_STATUS_OK,
           "C plausibility");
     auto p = model.plausibility(x, y);
@@ -207,6 +207,12 @@ void check_model(const brdf_atlas::Model &model) {
     CHECK(bytes.size() == map.size() * sizeof(float) &&
               std::memcmp(bytes.data(), map.data(), bytes.size()) == 0,
           "map of another window");
+    // The default rule's map is the soft floor's; the plausible rule has none.
+    auto floor = model.albedo_map_with(std::size_t(mv[0]), std::size_t(mv[1]), view,
+                                       std::size_t(mv[2]), BRDF_ATLAS_BLEND_FLOOR);
+    CHECK(floor == map, "the floor's map is the default one");
+    EXPECT_ERROR(model.albedo_map_with(4, 4, view, 0, BRDF_ATLAS_BLEND_PLAUSIBLE),
+                 BRDF_ATLAS_STATUS_INVALID_ARGUMENT, "has no map");
     EXPECT_ERROR(model.albedo_map(0, 10), BRDF_ATLAS_STATUS_INVALID_ARGUMENT, "map size");
     EXPECT_ERROR(model.albedo_map(100000, 100000), BRDF_ATLAS_STATUS_INVALID_ARGUMENT,
                  "map size");

@@ -1,0 +1,283 @@
+//! The albedo map of a latent window, cancellable, under the default blend
+//! rule or a chosen one; the predictive variance of every pixel.
+
+use std::sync::atomic::{AtomicI32, Ordering};
+
+use brdf_atlas_core::{BlendRule, NoProgress, Progress, View};
+
+use crate::check;
+use crate::consts::{BRDF_ATLAS_MAX_MAP_SIDE, BRDF_ATLAS_MAX_SAMPLES};
+use crate::model::{self as handle, BrdfAtlasModel, BrdfAtlasView};
+use crate::plausibility::rule;
+use crate::status::{BrdfAtlasStatus, Failure, Result, run};
+
+/// The samples a map uses: 0 means none (the library's default: the exact
+/// linear shortcut for a linear transform, the albedo field otherwise).
+fn map_samples(samples: usize) -> Result<Option<usize>> {
+    if samples > BRDF_ATLAS_MAX_SAMPLES {
+        return Err(Failure::invalid(format!(
+            "{samples} quadrature samples, at most {BRDF_ATLAS_MAX_SAMPLES} are accepted"
+        )));
+    }
+    Ok(match samples {
+        0 => None,
+        s => Some(s),
+    })
+}
+
+/// The albedo map of a `width` x `height` image of the latent window
+/// `view`: for every pixel, the linear RGB albedo of the material
+/// `brdf_atlas_model_reconstruct` gives at the pixel's centre (the default
+/// blend rule, the soft floor; `brdf_atlas_model_albedo_map_with` takes
+/// another). Row 0 is the top of the window
+/// (largest y); pixel (px, py) is at `buf[3 * (py * width + px) + c]`, c =
+/// 0, 1, 2 for red, green, blue.
+///
+/// `view` NULL means the model's default window (`brdf_atlas_model_view`).
+/// `samples` is the quadrature sample count per pixel; 0 means the library
+/// default: the albedo field (exact albedos at nodes, a polynomial between
+/// them, within 0.25% by its estimate; kept by the model, so later maps of
+/// the same region are fast) where it costs less than 256 samples a pixel,
+/// which are used otherwise. (The GP's map of a model in the raw transform
+/// is exact instead: the per-material albedos blended.) At most `BRDF_ATLAS_MAX_SAMPLES`.
+///
+/// Ownership: `model` and `view` are borrowed; `buf` is caller-owned, `len`
+/// floats (at least width * height * 3), written on success only.
+///
+/// Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (zero size or more than
+/// `BRDF_ATLAS_MAX_MAP_SIDE` a side, view not finite or empty, too many samples), UNSUPPORTED
+/// (the model is not 2-D), BUFFER_TOO_SMALL.
+///
+/// # Safety
+/// `model` is NULL or a live handle; `view` is NULL or valid for reading;
+/// `buf` is NULL or valid for writing `len` floats.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn brdf_atlas_model_albedo_map(
+    model: *const BrdfAtlasModel,
+    width: usize,
+    height: usize,
+    view: *const BrdfAtlasView,
+    samples: usize,
+    buf: *mut f32,
+    len: usize,
+) -> BrdfAtlasStatus {
+    run("brdf_atlas_model_albedo_map", || unsafe {
+        let rule = BlendRule::default();
+        albedo_map(
+            model,
+            width,
+            height,
+            view,
+            samples,
+            rule,
+            &NoProgress,
+            buf,
+            len,
+        )
+    })
+}
+
+/// `brdf_atlas_model_albedo_map` that its caller can cancel from another
+/// thread: the call reads `*cancel` now and then (atomically, relaxed
+/// order), and once it is non-zero stops within a map row or a step of the
+/// albedo field's refinement, writes nothing and returns CANCELLED. `cancel`
+/// is a `std::atomic<int32_t>` (C++) or `_Atomic int32_t` (C11) that stays
+/// alive for the call; set it to 1 and never back to 0 during the call. A
+/// viewer that moves on to another window cancels the stale map, so the
+/// cores are free for the new one at once.
+///
+/// Returns what `brdf_atlas_model_albedo_map` returns, NULL_ARGUMENT when
+/// `cancel` is NULL, and CANCELLED.
+///
+/// # Safety
+/// As `brdf_atlas_model_albedo_map`; `cancel` is NULL or points to an
+/// aligned 32-bit integer that every thread accesses only atomically while
+/// the call runs.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn brdf_atlas_model_albedo_map_cancellable(
+    model: *const BrdfAtlasModel,
+    width: usize,
+    height: usize,
+    view: *const BrdfAtlasView,
+    samples: usize,
+    cancel: *const i32,
+    buf: *mut f32,
+    len: usize,
+) -> BrdfAtlasStatus {
+    run("brdf_atlas_model_albedo_map_cancellable", || {
+        let flag = unsafe { cancel_flag(cancel) }?;
+        let rule = BlendRule::default();
+        unsafe { albedo_map(model, width, height, view, samples, rule, &flag, buf, len) }
+    })
+}
+
+/// `brdf_atlas_model_albedo_map` of the material blend rule `blend` forms
+/// at each pixel: `BRDF_ATLAS_BLEND_FLOOR` (the default's map, the same
+/// bits) or `BRDF_ATLAS_BLEND_GP` (the GP's own blend, clamped to >= 0;
+/// exact for a model in the raw transform). `BRDF_ATLAS_BLEND_PLAUSIBLE`
+/// has no map: its steps need a pass over the store per point. `cancel` is
+/// NULL (the call cannot be cancelled) or a flag as in
+/// `brdf_atlas_model_albedo_map_cancellable`.
+///
+/// Returns what `brdf_atlas_model_albedo_map_cancellable` returns, and
+/// INVALID_ARGUMENT for an unknown rule or the plausible rule.
+///
+/// # Safety
+/// As `brdf_atlas_model_albedo_map_cancellable`, but `cancel` may be NULL.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn brdf_atlas_model_albedo_map_with(
+    model: *const BrdfAtlasModel,
+    width: usize,
+    height: usize,
+    view: *const BrdfAtlasView,
+    samples: usize,
+    blend: i32,
+    cancel: *const i32,
+    buf: *mut f32,
+    len: usize,
+) -> BrdfAtlasStatus {
+    run("brdf_atlas_model_albedo_map_with", || {
+        let rule = rule(blend)?;
+        if rule == BlendRule::Plausible {
+            return Err(Failure::invalid(
+                "BRDF_ATLAS_BLEND_PLAUSIBLE has no map: its steps need a pass over the store \
+                 per point; map BRDF_ATLAS_BLEND_FLOOR or BRDF_ATLAS_BLEND_GP",
+            ));
+        }
+        let progress: Box<dyn Progress> = if cancel.is_null() {
+            Box::new(NoProgress)
+        } else {
+            Box::new(unsafe { cancel_flag(cancel) }?)
+        };
+        unsafe {
+            albedo_map(
+                model, width, height, view, samples, rule, &*progress, buf, len,
+            )
+        }
+    })
+}
+
+/// A caller's non-NULL cancel flag, checked for alignment.
+///
+/// # Safety
+/// `cancel` is NULL or points to an aligned 32-bit integer that every
+/// thread accesses only atomically while the call runs.
+unsafe fn cancel_flag<'a>(cancel: *const i32) -> Result<CancelFlag<'a>, Failure> {
+    if cancel.is_null() {
+        return Err(Failure::new(
+            BrdfAtlasStatus::NullArgument,
+            "cancel is NULL",
+        ));
+    }
+    if !cancel.cast::<AtomicI32>().is_aligned() {
+        return Err(Failure::invalid("cancel is not aligned to 4 bytes"));
+    }
+    // SAFETY: non-NULL and aligned (checked above); the caller keeps it
+    // alive for the call and accesses it only atomically.
+    Ok(CancelFlag(unsafe {
+        AtomicI32::from_ptr(cancel.cast_mut())
+    }))
+}
+
+/// A caller's cancel flag as the core's [`Progress`].
+struct CancelFlag<'a>(&'a AtomicI32);
+
+impl Progress for CancelFlag<'_> {
+    fn cancelled(&self) -> bool {
+        self.0.load(Ordering::Relaxed) != 0
+    }
+}
+
+/// The body of both albedo map entry points.
+///
+/// # Safety
+/// As `brdf_atlas_model_albedo_map`.
+#[allow(clippy::too_many_arguments)]
+unsafe fn albedo_map(
+    model: *const BrdfAtlasModel,
+    width: usize,
+    height: usize,
+    view: *const BrdfAtlasView,
+    samples: usize,
+    rule: BlendRule,
+    progress: &dyn Progress,
+    buf: *mut f32,
+    len: usize,
+) -> Result<(), Failure> {
+    let m = unsafe { handle::borrow(model) }?;
+    check::planar(m)?;
+    let view = unsafe { map_window(view, width, height) }?;
+    let values = check::product(&[width, height, 3], "map size")?;
+    let out = unsafe { check::buffer(buf, len, values, "buf") }?;
+    let samples = map_samples(samples)?;
+    let map = m.albedo_map_with(width, height, view, samples, rule, progress)?;
+    for (o, c) in out.chunks_exact_mut(3).zip(&map.rgb) {
+        o.copy_from_slice(c);
+    }
+    Ok(())
+}
+
+/// The window of a map request (`view` NULL: the default one), checked with
+/// the map's size.
+///
+/// # Safety
+/// `view` is NULL or valid for reading one `BrdfAtlasView`.
+unsafe fn map_window(
+    view: *const BrdfAtlasView,
+    width: usize,
+    height: usize,
+) -> Result<View, Failure> {
+    let view: View = match unsafe { check::input(view, 1, "view") } {
+        Ok(v) => v[0].into(),
+        Err(f) if f.status == BrdfAtlasStatus::NullArgument => View::default(),
+        Err(f) => return Err(f),
+    };
+    view.check()?;
+    let max = BRDF_ATLAS_MAX_MAP_SIDE;
+    if width == 0 || height == 0 || width > max || height > max {
+        return Err(Failure::invalid(format!(
+            "map size {width}x{height} must be between 1 and {max} a side"
+        )));
+    }
+    Ok(view)
+}
+
+/// The GP's predictive variance (`1 - k(x)^T K^-1 k(x)`: 0 at an input
+/// material, 1 where the data say nothing, above 0.5 the model knows
+/// little) at every pixel of a `width` x `height` image of `view`, laid out
+/// as `brdf_atlas_model_albedo_map` lays out its pixels, one float a pixel:
+/// pixel (px, py) is at `buf[py * width + px]`. A map picture fades where it
+/// is high. No pass over the store: much cheaper than the albedo map.
+///
+/// `view` NULL means the model's default window.
+///
+/// Ownership: `model` and `view` are borrowed; `buf` is caller-owned, `len`
+/// floats (at least width * height), written on success only.
+///
+/// Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (zero size or more than
+/// `BRDF_ATLAS_MAX_MAP_SIDE` a side, view not finite or empty), UNSUPPORTED
+/// (the model is not 2-D), BUFFER_TOO_SMALL.
+///
+/// # Safety
+/// `model` is NULL or a live handle; `view` is NULL or valid for reading;
+/// `buf` is NULL or valid for writing `len` floats.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn brdf_atlas_model_variance_map(
+    model: *const BrdfAtlasModel,
+    width: usize,
+    height: usize,
+    view: *const BrdfAtlasView,
+    buf: *mut f32,
+    len: usize,
+) -> BrdfAtlasStatus {
+    run("brdf_atlas_model_variance_map", || {
+        let m = unsafe { handle::borrow(model) }?;
+        check::planar(m)?;
+        let view = unsafe { map_window(view, width, height) }?;
+        let values = check::product(&[width, height], "map size")?;
+        let out = unsafe { check::buffer(buf, len, values, "buf") }?;
+        out.copy_from_slice(&m.variance_map(width, height, view)?);
+        m.verify()?;
+        Ok(())
+    })
+}
