@@ -4,7 +4,9 @@
 // frames' delays are printed), click, press Validate, wait
 // for the reconstruction off the GUI thread, and check the table against
 // the C library called directly (bit for bit), then save it and compare
-// with the library's own writer byte for byte. Under Validate the panel
+// with the library's own writer byte for byte. Validate makes the default
+// rule's material (the soft floor), or the GP's or the stepped rule's when
+// chosen in the panel, which remembers the choice. Under Validate the panel
 // states the material's plausibility: the numbers of
 // brdf_atlas_model_plausibility called directly at the same point, in red
 // where the library says the material is not plausible, greyed once the
@@ -20,13 +22,14 @@
 // Environment: BRDF_ATLAS_TEST_MODEL (a 2-D model file, required),
 // BRDF_ATLAS_ARTEFACTS (directory for the screenshot; default ".").
 // Run with QT_QPA_PLATFORM=offscreen on a machine without a display.
-#include <QCheckBox>
+#include <QComboBox>
 #include <QDir>
 #include <QFile>
 #include <QLabel>
 #include <QLayout>
 #include <QProgressBar>
 #include <QPushButton>
+#include <QSettings>
 #include <QSignalSpy>
 #include <QTemporaryDir>
 #include <QToolTip>
@@ -40,9 +43,11 @@
 
 namespace {
 
-// The C library's own answer at (x, y), through a handle of its own.
+// The C library's own answer at (x, y), through a handle of its own: under
+// the library's default rule, the soft floor, from the plain
+// brdf_atlas_model_reconstruct; under another, from _reconstruct_with.
 std::vector<double> referenceTable(const QString &model, double x, double y,
-                                   std::int32_t blend = BRDF_ATLAS_BLEND_GP) {
+                                   std::int32_t blend = BRDF_ATLAS_BLEND_FLOOR) {
     BrdfAtlasModel *h = nullptr;
     if (brdf_atlas_model_open(model.toUtf8().constData(), &h) != BRDF_ATLAS_STATUS_OK) {
         qFatal("brdf_atlas_model_open: %s", brdf_atlas_last_error_message());
@@ -51,7 +56,7 @@ std::vector<double> referenceTable(const QString &model, double x, double y,
     brdf_atlas_model_table_len(h, &len);
     std::vector<double> t(len);
     std::size_t written = 0;
-    const BrdfAtlasStatus s = blend == BRDF_ATLAS_BLEND_GP
+    const BrdfAtlasStatus s = blend == BRDF_ATLAS_BLEND_FLOOR
                                   ? brdf_atlas_model_reconstruct(h, x, y, t.data(), t.size(), &written)
                                   : brdf_atlas_model_reconstruct_with(h, x, y, blend, t.data(), t.size(), &written);
     if (s != BRDF_ATLAS_STATUS_OK || written != len) {
@@ -69,7 +74,7 @@ QByteArray readAll(const QString &path) {
 
 // The C library's plausibility at (x, y), through a handle of its own.
 BrdfAtlasPlausibility referencePlausibility(const QString &model, double x, double y,
-                                            std::int32_t blend = BRDF_ATLAS_BLEND_GP) {
+                                            std::int32_t blend = BRDF_ATLAS_BLEND_FLOOR) {
     BrdfAtlasModel *h = nullptr;
     if (brdf_atlas_model_open(model.toUtf8().constData(), &h) != BRDF_ATLAS_STATUS_OK) {
         qFatal("brdf_atlas_model_open: %s", brdf_atlas_last_error_message());
@@ -90,12 +95,9 @@ void rewriteInPlace(const QString &path, const QByteArray &bytes) {
         qFatal("cannot rewrite %s", qPrintable(path));
 }
 
-// Click the view half-way between its first two materials and press
-// Validate; wait for the outcome. Returns the failure message, or empty.
-QString validateBetweenMaterials(AtlasPanel *panel) {
-    AtlasMapView *view = panel->mapView();
-    const QPointF mid = (view->materialPoints()[0] + view->materialPoints()[1]) / 2;
-    QTest::mouseClick(view, Qt::LeftButton, Qt::NoModifier, view->latentToWidget(mid).toPoint());
+// Press Validate and wait for the outcome. Returns the failure message, or
+// empty.
+QString validateAtMarker(AtlasPanel *panel) {
     QSignalSpy done(panel, &AtlasPanel::reconstructed);
     QSignalSpy failed(panel, &AtlasPanel::failed);
     QTest::mouseClick(panel->validateButton(), Qt::LeftButton);
@@ -104,18 +106,35 @@ QString validateBetweenMaterials(AtlasPanel *panel) {
     return failed.isEmpty() ? QString() : failed.first().first().toString();
 }
 
+// Click the view half-way between its first two materials, then Validate.
+QString validateBetweenMaterials(AtlasPanel *panel) {
+    AtlasMapView *view = panel->mapView();
+    const QPointF mid = (view->materialPoints()[0] + view->materialPoints()[1]) / 2;
+    QTest::mouseClick(view, Qt::LeftButton, Qt::NoModifier, view->latentToWidget(mid).toPoint());
+    return validateAtMarker(panel);
+}
+
+// Choose the blend rule shown as `label` in the panel's combo box.
+void chooseBlend(AtlasPanel *panel, const char *label) {
+    QComboBox *box = panel->blendBox();
+    const int i = box->findText(QString::fromUtf8(label));
+    if (i < 0) qFatal("no blend rule \"%s\" in the panel", label);
+    box->setCurrentIndex(i);
+}
+
 }  // namespace
 
 class TestAtlasMap : public QObject {
     Q_OBJECT
 private:
     QString modelPath_;
+    QTemporaryDir settings_;
     AtlasPanel *panel_ = nullptr;
     AtlasMapView *view_ = nullptr;
 
     // The panel's plausibility line states what the library says at the
     // marker: the same numbers, the verdict and its colour, low confidence.
-    void checkPlausibilityShown(AtlasPanel *panel, std::int32_t blend = BRDF_ATLAS_BLEND_GP) {
+    void checkPlausibilityShown(AtlasPanel *panel, std::int32_t blend = BRDF_ATLAS_BLEND_FLOOR) {
         const QPointF m = panel->mapView()->marker();
         const BrdfAtlasPlausibility want = referencePlausibility(modelPath_, m.x(), m.y(), blend);
         const AtlasReconstruction &r = panel->lastReconstruction();
@@ -159,6 +178,10 @@ private slots:
     void initTestCase() {
         modelPath_ = qEnvironmentVariable("BRDF_ATLAS_TEST_MODEL");
         QVERIFY2(!modelPath_.isEmpty(), "set BRDF_ATLAS_TEST_MODEL to a 2-D brdf-atlas model file");
+        // The panels' settings in a directory of the test's own, empty at the
+        // start: the defaults apply, and the user's settings stay as they are.
+        QVERIFY(settings_.isValid());
+        QSettings::setPath(QSettings::NativeFormat, QSettings::UserScope, settings_.path());
         panel_ = new AtlasPanel;
         view_ = panel_->mapView();
         // Tall enough that the marker between the first two materials stays
@@ -347,6 +370,8 @@ private slots:
     }
 
     void validateReconstructsOffTheGuiThread() {
+        // No rule chosen yet: the library's default, the material the map draws.
+        QCOMPARE(panel_->blendRule(), BRDF_ATLAS_BLEND_FLOOR);
         QSignalSpy done(panel_, &AtlasPanel::reconstructed);
         QSignalSpy failed(panel_, &AtlasPanel::failed);
         const QPointF m = view_->marker();
@@ -366,6 +391,10 @@ private slots:
         const AtlasReconstruction r = done.first().first().value<AtlasReconstruction>();
         QCOMPARE(r.x, m.x());
         QCOMPARE(r.y, m.y());
+        QCOMPARE(r.blend, BRDF_ATLAS_BLEND_FLOOR);
+        // The default rule goes unnamed in the status line.
+        QVERIFY2(panel_->statusLabel()->text().contains(": reconstructed in "),
+                 qPrintable(panel_->statusLabel()->text()));
         QVERIFY(r.name.contains(view_->materialNames()[view_->nearestMaterial(m)]));
         QVERIFY(r.table);
         const std::vector<double> want = referenceTable(modelPath_, m.x(), m.y());
@@ -385,9 +414,10 @@ private slots:
         checkPlausibilityShown(panel_);
     }
 
-    void plausibleBoxValidatesThePlausibleRule() {
-        // A point where the rule moves the GP's weights, so that the two
-        // tables differ: beyond one material, away from another.
+    void steppedRuleIsValidatedWhenChosen() {
+        // A point where the stepped rule moves the GP's weights, so that its
+        // table differs from the GP's and from the default floor's: beyond
+        // one material, away from another.
         const QVector<QPointF> pts = view_->materialPoints();
         QPointF at;
         bool found = false;
@@ -395,25 +425,48 @@ private slots:
             for (int j = 0; j < pts.size() && !found; ++j) {
                 if (i == j) continue;
                 at = pts[i] + 0.5 * (pts[i] - pts[j]);
-                found = referenceTable(modelPath_, at.x(), at.y()) !=
-                        referenceTable(modelPath_, at.x(), at.y(), BRDF_ATLAS_BLEND_PLAUSIBLE);
+                const std::vector<double> stepped =
+                    referenceTable(modelPath_, at.x(), at.y(), BRDF_ATLAS_BLEND_PLAUSIBLE);
+                found = stepped != referenceTable(modelPath_, at.x(), at.y(), BRDF_ATLAS_BLEND_GP) &&
+                        stepped != referenceTable(modelPath_, at.x(), at.y());
             }
         }
-        QVERIFY2(found, "no point of the test model where the plausible rule moves the weights");
+        QVERIFY2(found, "no point of the test model where the stepped rule moves the weights");
         view_->setMarker(at);
-        panel_->plausibleBox()->setChecked(true);
-        QSignalSpy done(panel_, &AtlasPanel::reconstructed);
-        QSignalSpy failed(panel_, &AtlasPanel::failed);
-        QTest::mouseClick(panel_->validateButton(), Qt::LeftButton);
-        QVERIFY(QTest::qWaitFor([&] { return done.count() + failed.count() > 0; }, 120000));
-        panel_->plausibleBox()->setChecked(false);
-        QVERIFY2(failed.isEmpty(), failed.isEmpty() ? "" : qPrintable(failed.first().first().toString()));
+        chooseBlend(panel_, "Stepped");
+        const QString error = validateAtMarker(panel_);
+        chooseBlend(panel_, "Soft floor");
+        QVERIFY2(error.isEmpty(), qPrintable(error));
         const AtlasReconstruction &r = panel_->lastReconstruction();
         QCOMPARE(r.blend, BRDF_ATLAS_BLEND_PLAUSIBLE);
         QVERIFY(*r.table == referenceTable(modelPath_, at.x(), at.y(), BRDF_ATLAS_BLEND_PLAUSIBLE));
         checkPlausibilityShown(panel_, BRDF_ATLAS_BLEND_PLAUSIBLE);
-        QVERIFY2(panel_->statusLabel()->text().contains("(plausible rule)"),
+        QVERIFY2(panel_->statusLabel()->text().contains("(stepped plausible rule)"),
                  qPrintable(panel_->statusLabel()->text()));
+    }
+
+    void blendChoiceIsRemembered() {
+        // By the rule's name; a new panel starts with the last choice, and
+        // with the default for a name this version does not know.
+        auto stored = [] { return QSettings("brdf-atlas", "plugin").value(AtlasPanel::blendKey()).toString(); };
+        const struct { const char *label, *key; std::int32_t rule; } choices[] = {
+            {"GP", "gp", BRDF_ATLAS_BLEND_GP}, {"Stepped", "plausible", BRDF_ATLAS_BLEND_PLAUSIBLE},
+            {"Soft floor", "floor", BRDF_ATLAS_BLEND_FLOOR}};
+        for (const auto &c : choices) {
+            chooseBlend(panel_, c.label);
+            QCOMPARE(stored(), QString(c.key));
+            AtlasPanel next;
+            QCOMPARE(next.blendBox()->currentText(), QString(c.label));
+            QCOMPARE(next.blendRule(), c.rule);
+        }
+        QSettings("brdf-atlas", "plugin").setValue(AtlasPanel::blendKey(), "convex");
+        QCOMPARE(AtlasPanel().blendRule(), BRDF_ATLAS_BLEND_FLOOR);
+        // Each rule's tooltip says that the map draws the soft floor's material.
+        for (int i = 0; i < panel_->blendBox()->count(); ++i) {
+            const QString tip = panel_->blendBox()->itemData(i, Qt::ToolTipRole).toString();
+            QVERIFY2(tip.contains("the map draws", Qt::CaseInsensitive) && (i == 0 || tip.contains("soft floor")),
+                     qPrintable(tip));
+        }
     }
 
     void plausibilityWording() {
@@ -477,7 +530,8 @@ private slots:
     void implausibleMaterialIsSaidInRed() {
         // The first point of a grid over the model's default view, widened
         // twice, where the library says the GP's material is not plausible
-        // (mixed-sign weights between unlike materials, or far from them).
+        // (mixed-sign weights between unlike materials, or far from them),
+        // validated with "GP" chosen: the default floor's never clamps.
         brdf_atlas::Model m(modelPath_.toStdString());
         const brdf_atlas::View v = m.view();
         const double cx = (v.x0 + v.x1) / 2, cy = (v.y0 + v.y1) / 2;
@@ -488,18 +542,24 @@ private slots:
         for (int j = 0; j <= steps && !found; ++j) {
             for (int i = 0; i <= steps && !found; ++i) {
                 at = QPointF(cx - hw + 2 * hw * i / steps, cy - hh + 2 * hh * j / steps);
-                found = m.plausibility(at.x(), at.y()).plausible == 0;
+                found = m.plausibility(at.x(), at.y(), BRDF_ATLAS_BLEND_GP).plausible == 0;
             }
         }
-        if (!found) QSKIP("the library finds every material of the grid plausible on this model");
+        if (!found) QSKIP("the library finds every GP material of the grid plausible on this model");
         view_->setMarker(at);
         QVERIFY(!panel_->plausibilityLabel()->isEnabled());
-        QSignalSpy done(panel_, &AtlasPanel::reconstructed);
-        QSignalSpy failed(panel_, &AtlasPanel::failed);
-        QTest::mouseClick(panel_->validateButton(), Qt::LeftButton);
-        QTRY_VERIFY_WITH_TIMEOUT(done.count() + failed.count() > 0, 120000);
-        QVERIFY2(failed.isEmpty(), failed.isEmpty() ? "" : qPrintable(failed.first().first().toString()));
-        checkPlausibilityShown(panel_);
+        chooseBlend(panel_, "GP");
+        const QString error = validateAtMarker(panel_);
+        chooseBlend(panel_, "Soft floor");
+        QVERIFY2(error.isEmpty(), qPrintable(error));
+        // The GP's table, not the default floor's, which differs there.
+        const AtlasReconstruction &r = panel_->lastReconstruction();
+        QCOMPARE(r.blend, BRDF_ATLAS_BLEND_GP);
+        const std::vector<double> gp = referenceTable(modelPath_, at.x(), at.y(), BRDF_ATLAS_BLEND_GP);
+        QVERIFY2(*r.table == gp, "the widget's GP table differs from brdf_atlas_model_reconstruct_with's");
+        QVERIFY2(gp != referenceTable(modelPath_, at.x(), at.y()), "the GP's table is the default floor's");
+        QVERIFY2(panel_->statusLabel()->text().contains("(GP blend)"), qPrintable(panel_->statusLabel()->text()));
+        checkPlausibilityShown(panel_, BRDF_ATLAS_BLEND_GP);
         QLabel *label = panel_->plausibilityLabel();
         QVERIFY2(label->text().startsWith("Not plausible: "), qPrintable(label->text()));
         // Squeezed to its minimum size, the panel still shows every text
@@ -544,9 +604,13 @@ private slots:
     }
 
     void saveWritesWhatTheLibraryWrites() {
+        // The library writes the default rule's material: validate under it.
+        const QString error = validateAtMarker(panel_);
+        QVERIFY2(error.isEmpty(), qPrintable(error));
         QTemporaryDir dir;
         QVERIFY(dir.isValid());
         const AtlasReconstruction &r = panel_->lastReconstruction();
+        QCOMPARE(r.blend, BRDF_ATLAS_BLEND_FLOOR);
         const QString ours = dir.filePath("ours.binary"), theirs = dir.filePath("theirs.binary");
         QVERIFY(panel_->saveTo(ours));
         brdf_atlas::Model(modelPath_.toStdString()).save(r.x, r.y, theirs.toStdString());

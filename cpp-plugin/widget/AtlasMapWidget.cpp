@@ -2,7 +2,7 @@
 #include "AtlasMapWidget.h"
 #include "AtlasStatus.h"
 
-#include <QCheckBox>
+#include <QComboBox>
 #include <QFileInfo>
 #include <QHBoxLayout>
 #include <QLabel>
@@ -474,7 +474,8 @@ AtlasPanel::AtlasPanel(QWidget *parent)
       coords_(new QLabel),
       validate_(new QPushButton(QStringLiteral("Validate"))),
       save_(new QPushButton(QStringLiteral("Save .binary..."))),
-      plausible_(new QCheckBox(QStringLiteral("Plausible"))),
+      blendLabel_(new QLabel(QStringLiteral("Blend:"))),
+      blend_(new QComboBox),
       plausibility_(new QLabel),
       progress_(new QProgressBar),
       status_(new QLabel),
@@ -493,17 +494,29 @@ AtlasPanel::AtlasPanel(QWidget *parent)
     coords_->setTextInteractionFlags(Qt::TextSelectableByMouse);
     coords_->setWordWrap(true);
     layout->addWidget(coords_);
+    // The blend rule on a row of its own above the buttons: beside them it
+    // would widen the panel past BRDF Explorer's parameter window.
+    auto *rule = new QHBoxLayout;
+    // The rule chosen last time; a name this version does not know, or none,
+    // is the default.
+    const QString chosen =
+        QSettings(QStringLiteral("brdf-atlas"), QStringLiteral("plugin")).value(blendKey()).toString();
+    for (const AtlasBlendChoice &c : atlasBlendChoices()) {
+        blend_->addItem(c.label, int(c.rule));
+        blend_->setItemData(blend_->count() - 1, c.tip, Qt::ToolTipRole);
+        if (chosen == c.key) blend_->setCurrentIndex(blend_->count() - 1);
+    }
+    blend_->setToolTip(atlasBlendChoice(blendRule()).tip);
+    blendLabel_->setBuddy(blend_);
+    blendLabel_->setToolTip(QStringLiteral("The blend rule Validate makes the material with"));
+    rule->addWidget(blendLabel_);
+    rule->addWidget(blend_);
+    rule->addStretch(1);
+    layout->addLayout(rule);
     auto *buttons = new QHBoxLayout;
     validate_->setToolTip(QStringLiteral("Reconstruct the material at the marker"));
     save_->setToolTip(QStringLiteral("Save the last reconstructed material as a MERL .binary file"));
-    plausible_->setToolTip(
-        QStringLiteral("Validate makes the plausible rule's material: the GP's blend weights moved "
-                       "towards a convex blend of the materials just where it would go negative "
-                       "or reflect more than it receives (one more pass over the model's data)"));
-    plausible_->setChecked(
-        QSettings(QStringLiteral("brdf-atlas"), QStringLiteral("plugin")).value(plausibleKey()).toBool());
     buttons->addWidget(validate_);
-    buttons->addWidget(plausible_);
     buttons->addWidget(save_);
     layout->addLayout(buttons);
     plausibility_->setWordWrap(true);
@@ -531,8 +544,10 @@ AtlasPanel::AtlasPanel(QWidget *parent)
     });
     connect(validate_, &QPushButton::clicked, this, &AtlasPanel::validatePoint);
     connect(save_, &QPushButton::clicked, this, &AtlasPanel::saveDialog);
-    connect(plausible_, &QCheckBox::toggled, this, [](bool on) {
-        QSettings(QStringLiteral("brdf-atlas"), QStringLiteral("plugin")).setValue(plausibleKey(), on);
+    connect(blend_, QOverload<int>::of(&QComboBox::currentIndexChanged), this, [this] {
+        const AtlasBlendChoice &c = atlasBlendChoice(blendRule());
+        blend_->setToolTip(c.tip);
+        QSettings(QStringLiteral("brdf-atlas"), QStringLiteral("plugin")).setValue(blendKey(), c.key);
     });
     connect(openWatcher_, &QFutureWatcher<Opened>::finished, this, [this] {
         Opened o = openWatcher_->result();
@@ -568,8 +583,7 @@ AtlasPanel::AtlasPanel(QWidget *parent)
         status_->setStyleSheet(QString());
         status_->setText(QStringLiteral("%1: reconstructed%2 in %3 s")
                              .arg(b.r.name)
-                             .arg(b.r.blend == BRDF_ATLAS_BLEND_PLAUSIBLE ? QStringLiteral(" (plausible rule)")
-                                                                         : QString())
+                             .arg(atlasBlendChoice(b.r.blend).said)
                              .arg(seconds, 0, 'f', 2));
         emit reconstructed(last_);
     });
@@ -579,6 +593,8 @@ AtlasPanel::~AtlasPanel() {
     openWatcher_->waitForFinished();
     buildWatcher_->waitForFinished();
 }
+
+std::int32_t AtlasPanel::blendRule() const { return std::int32_t(blend_->currentData().toInt()); }
 
 bool AtlasPanel::busy() const { return openWatcher_->isRunning() || buildWatcher_->isRunning(); }
 
@@ -697,7 +713,7 @@ void AtlasPanel::validatePoint() {
     r.y = m.y();
     r.name = nameFor(r.x, r.y);
     r.modelPath = modelPath_;
-    r.blend = plausible_->isChecked() ? BRDF_ATLAS_BLEND_PLAUSIBLE : BRDF_ATLAS_BLEND_GP;
+    r.blend = blendRule();
     std::shared_ptr<const brdf_atlas::Model> model = view_->model();
     clock_.start();
     setBusy(true, QStringLiteral("reconstructing at (%1, %2)...").arg(r.x, 0, 'f', 4).arg(r.y, 0, 'f', 4));

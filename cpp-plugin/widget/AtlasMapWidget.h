@@ -8,10 +8,11 @@
 // on hover) and a marker where the user clicked; the wheel zooms about the
 // cursor, dragging pans. AtlasPanel puts the view beside the latent
 // coordinates of the marker, a "Validate" button that reconstructs the
-// material there off the GUI thread (with a busy indicator) and says under
-// it how physical that material is, and a "Save .binary..." button. The
-// panel emits `reconstructed` with the whole MERL table; what to do with it
-// (a BRDF in BRDF Explorer's list, a file) is the host's business.
+// material there off the GUI thread (with a busy indicator) under the blend
+// rule chosen above it and says under it how physical that material is, and
+// a "Save .binary..." button. The panel emits `reconstructed` with the whole
+// MERL table; what to do with it (a BRDF in BRDF Explorer's list, a file)
+// is the host's business.
 //
 // Depends on Qt5Widgets, Qt5Concurrent and the brdf-atlas C library
 // (brdf_atlas.h / brdf_atlas.hpp); nothing of BRDF Explorer.
@@ -36,7 +37,7 @@
 
 #include "brdf_atlas.hpp"
 
-class QCheckBox;
+class QComboBox;
 class QLabel;
 class QProgressBar;
 class QPushButton;
@@ -53,9 +54,10 @@ struct AtlasReconstruction {
     brdf_atlas::Dims dims{};
     /// The MERL table (3 * bins doubles, the data of a .binary file).
     std::shared_ptr<const std::vector<double>> table;
-    /// The blend rule the table was made with: BRDF_ATLAS_BLEND_GP or
-    /// BRDF_ATLAS_BLEND_PLAUSIBLE.
-    std::int32_t blend = BRDF_ATLAS_BLEND_GP;
+    /// The blend rule the table was made with: BRDF_ATLAS_BLEND_FLOOR (the
+    /// library's default, the material the map draws), BRDF_ATLAS_BLEND_GP
+    /// or BRDF_ATLAS_BLEND_PLAUSIBLE.
+    std::int32_t blend = BRDF_ATLAS_BLEND_FLOOR;
     /// How physical the table is and what the model knows at (x, y)
     /// (brdf_atlas_model_plausibility under the same rule).
     brdf_atlas::Plausibility plausibility{};
@@ -227,9 +229,13 @@ public:
     AtlasMapView *mapView() const { return view_; }
     QPushButton *validateButton() const { return validate_; }
     QPushButton *saveButton() const { return save_; }
-    /// Validate makes the plausible rule's material when checked, the GP's
-    /// otherwise (remembered across sessions).
-    QCheckBox *plausibleBox() const { return plausible_; }
+    /// The blend rule Validate makes the material with: "Soft floor"
+    /// (BRDF_ATLAS_BLEND_FLOOR, the default), "GP" (BRDF_ATLAS_BLEND_GP) or
+    /// "Stepped" (BRDF_ATLAS_BLEND_PLAUSIBLE); each item's data is its rule.
+    /// Remembered across sessions.
+    QComboBox *blendBox() const { return blend_; }
+    /// The rule chosen in blendBox().
+    std::int32_t blendRule() const;
     QProgressBar *progressBar() const { return progress_; }
     QLabel *coordinatesLabel() const { return coords_; }
     QLabel *statusLabel() const { return status_; }
@@ -247,8 +253,9 @@ public:
     /// The QSettings key of the last model opened (organisation and
     /// application names are the host's).
     static QString settingsKey() { return QStringLiteral("brdf-atlas/lastModel"); }
-    /// Settings key of the Plausible box's state.
-    static QString plausibleKey() { return QStringLiteral("brdf-atlas/plausible"); }
+    /// Settings key of the blend rule chosen: "floor", "gp" or "plausible"
+    /// (the CLI's --blend names); anything else is read as "floor".
+    static QString blendKey() { return QStringLiteral("brdf-atlas/blend"); }
 
 public slots:
     /// Open a model file off the GUI thread (checks the store); emits
@@ -292,7 +299,8 @@ private:
     QLabel *coords_;
     QPushButton *validate_;
     QPushButton *save_;
-    QCheckBox *plausible_;
+    QLabel *blendLabel_;
+    QComboBox *blend_;
     QLabel *plausibility_;
     QProgressBar *progress_;
     QLabel *status_;

@@ -84,6 +84,36 @@ QString atlasPlausibilityStyle(const brdf_atlas::Plausibility &p) {
     return p.plausible ? QString() : atlasErrorStyle();
 }
 
+const QVector<AtlasBlendChoice> &atlasBlendChoices() {
+    static const QVector<AtlasBlendChoice> choices = {
+        {BRDF_ATLAS_BLEND_FLOOR, QStringLiteral("floor"), QStringLiteral("Soft floor"), QString(),
+         QStringLiteral("The library's default, and the material the map draws: the GP's blend with "
+                        "each value lifted smoothly onto a floor at 0.3 times a convex blend of the "
+                        "materials. Never negative, so nothing is clamped; more accurate than the "
+                        "GP's blend on held-out materials; no extra pass over the model's data.")},
+        {BRDF_ATLAS_BLEND_GP, QStringLiteral("gp"), QStringLiteral("GP"), QStringLiteral(" (GP blend)"),
+         QStringLiteral("The GP's own blend, the paper's reconstruction: between unlike materials its "
+                        "weights take both signs, and values that come out negative are clamped to "
+                        "0. The map draws the soft floor's material, not this one.")},
+        {BRDF_ATLAS_BLEND_PLAUSIBLE, QStringLiteral("plausible"), QStringLiteral("Stepped"),
+         QStringLiteral(" (stepped plausible rule)"),
+         QStringLiteral("The stepped plausible rule: in each theta_h bin where the GP's blend would "
+                        "be clamped, its weights moved towards a convex blend of the materials just "
+                        "far enough that the clamp removes almost nothing, then further wherever "
+                        "the material would reflect more light than it receives; one more pass "
+                        "over the model's data. The map draws the soft floor's material, not this "
+                        "one.")},
+    };
+    return choices;
+}
+
+const AtlasBlendChoice &atlasBlendChoice(std::int32_t rule) {
+    for (const AtlasBlendChoice &c : atlasBlendChoices()) {
+        if (c.rule == rule) return c;
+    }
+    return atlasBlendChoices().first();
+}
+
 QString atlasErrorStyle() { return QStringLiteral("color: #c03030"); }
 
 void atlasFitLabel(QLabel *label, int width, int minLines) {

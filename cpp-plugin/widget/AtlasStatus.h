@@ -1,7 +1,7 @@
 // AtlasStatus.h: what the brdf-atlas panel says about a latent point, in
 // words for an artist: whether the model knows much there, and how physical
-// the material reconstructed there is (brdf_atlas_model_plausibility); and
-// how a label of such words fits the panel.
+// the material reconstructed there is (brdf_atlas_model_plausibility); the
+// blend rules Validate offers; and how a label of such words fits the panel.
 //
 // Plain functions of the library's numbers, kept apart from the widgets so
 // that a test can put the same numbers into the same words.
@@ -9,6 +9,9 @@
 #define BRDF_ATLAS_STATUS_H
 
 #include <QString>
+#include <QVector>
+
+#include <cstdint>
 
 class QLabel;
 
@@ -33,6 +36,23 @@ QString atlasPlausibilityText(const brdf_atlas::Plausibility &p);
 /// The colour a label shows `p` in: empty (the palette's) when plausible,
 /// the panel's error red when not.
 QString atlasPlausibilityStyle(const brdf_atlas::Plausibility &p);
+
+/// A blend rule Validate offers: the library's constant, its name in the
+/// settings (the CLI's --blend name), its label in the panel, what the
+/// status line adds after "reconstructed" (nothing for the default) and a
+/// tooltip saying what it does.
+struct AtlasBlendChoice {
+    std::int32_t rule;
+    QString key, label, said, tip;
+};
+
+/// The blend rules Validate offers, in the panel's order: the library's
+/// default, the soft floor (the material the map draws), then the GP's
+/// blend and the stepped plausible rule.
+const QVector<AtlasBlendChoice> &atlasBlendChoices();
+
+/// The choice of `rule`; the default's for a rule not offered.
+const AtlasBlendChoice &atlasBlendChoice(std::int32_t rule);
 
 /// The style sheet of the panel's error texts.
 QString atlasErrorStyle();
