@@ -15,12 +15,13 @@ Properties:
   commas or blanks) for any;
 - or ``filename`` (string): a MERL ``.binary`` file, evaluated directly
   (the same nearest-bin lookup);
-- ``blend`` (string, optional, with ``model``): ``"gp"`` (default: the
-  GP's weights), ``"plausible"`` (the plausible rule's, which keeps the
-  material non-negative and its albedo at most 1; one pass over the model's
-  store when the scene loads, none per ray) or ``"floor"`` (the GP's values
-  lifted softly onto a floor under the convex blend's: never negative, no
-  pass over the store);
+- ``blend`` (string, optional, with ``model``): ``"floor"`` (default: the
+  GP's values lifted softly onto a floor at 0.3 times a convex blend's:
+  never negative, no pass over the store; the material the map shows),
+  ``"gp"`` (the GP's own blend, clamped to >= 0) or ``"plausible"`` (the
+  stepped rule's, which keeps the material non-negative and its albedo at
+  most 1; one pass over the model's store when the scene loads, none per
+  ray);
 - ``sampling`` (string, optional): ``"tabulated"`` (default: a table of
   the material's own lobe mixed with 10% cosine sampling) or ``"cosine"``.
 
@@ -95,8 +96,8 @@ def _material(props):
         raise InputError(
             f"brdf_atlas BSDF: {path}: expected the latent point as 'x' and 'y', or 'latent'"
         )
-    blend = str(props.get("blend", "gp")) if has("blend") else "gp"
-    label = f"{path} at {x}" if blend == "gp" else f"{path} at {x} ({blend} blend)"
+    blend = str(props.get("blend", "floor")) if has("blend") else "floor"
+    label = f"{path} at {x}" if blend == "floor" else f"{path} at {x} ({blend} blend)"
     return model.material(x, blend=blend), label
 
 

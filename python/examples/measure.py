@@ -143,8 +143,10 @@ def quality(args, work):
         brdf_atlas.mitsuba.register()
         for transform, model in models.items():
             x = model.latent[model.names.index("lambert-a")]
-            px = furnace(mi, {"type": "brdf_atlas", "model": str(model.path), "x": float(x[0]), "y": float(x[1])},
-                         spp, res)
+            # The GP's blend: it reproduces lambert-a at its latent point.
+            bsdf = {"type": "brdf_atlas", "model": str(model.path), "x": float(x[0]), "y": float(x[1]),
+                    "blend": "gp"}
+            px = furnace(mi, bsdf, spp, res)
             mean, se = px.mean(0), px.std(0, ddof=1) / np.sqrt(len(px))
             err = (mean - rho) / rho
             print(f"  {variant:12s} {transform}: {mean.round(5).tolist()}, relative error "

@@ -68,11 +68,11 @@ impl PyModel {
     }
 }
 
-/// The blend rule named `blend`: "gp", "plausible" or "floor".
+/// The blend rule named `blend`: "floor" (the default), "gp" or "plausible".
 fn rule_of(blend: &str) -> PyResult<BlendRule> {
     Ok(BlendRule::parse(blend).ok_or_else(|| {
         Failure::input(format!(
-            "blend rule {blend:?}: expected \"gp\", \"plausible\" or \"floor\""
+            "blend rule {blend:?}: expected \"floor\", \"gp\" or \"plausible\""
         ))
     })?)
 }
@@ -155,8 +155,10 @@ impl PyModel {
         )
     }
 
-    /// The N blend weights at `x`: every output there is the mean material
-    /// plus this weighted sum of the materials, in the transformed space.
+    /// The GP's N blend weights at `x`: the GP's blend there is the mean
+    /// material plus this weighted sum of the materials, in the transformed
+    /// space (the default rule, "floor", then lifts each value of it softly
+    /// onto a floor under a convex blend's).
     fn weights<'py>(
         &self,
         py: Python<'py>,
@@ -186,13 +188,13 @@ impl PyModel {
     }
 
     /// How physical the material at `x` is, under blend rule `blend`
-    /// ("gp", the default, "plausible" or "floor"): a dict with
+    /// ("floor", the default, "gp" or "plausible"): a dict with
     /// `clamped_reflectance` (share of the cosine-weighted reflectance the
     /// clamp to >= 0 removes), `clamped_values`, `max_albedo` (largest
     /// directional albedo; at most 1 for a physical material),
     /// `max_albedo_incidence` (degrees) and `plausible`. One pass over the
     /// store, without the GIL.
-    #[pyo3(signature = (x, blend = "gp"))]
+    #[pyo3(signature = (x, blend = "floor"))]
     fn plausibility<'py>(
         &self,
         py: Python<'py>,
@@ -215,15 +217,16 @@ impl PyModel {
     }
 
     /// The material at `x`, for repeated queries (it remembers the bins it
-    /// has reconstructed) and sampling. `blend`: "gp" (the GP's weights,
-    /// the default), "plausible" (the plausible rule's: one pass over the
-    /// store when the material is made, none per query) or "floor" (the GP's
-    /// values lifted softly onto a floor under the convex blend's: no pass).
-    #[pyo3(signature = (x, blend = "gp"))]
+    /// has reconstructed) and sampling. `blend`: "floor" (the default: the
+    /// GP's values lifted softly onto a floor at 0.3 times a convex blend's,
+    /// never clamped; what the map shows), "gp" (the GP's own blend, clamped
+    /// to >= 0) or "plausible" (the stepped rule's: one pass over the store
+    /// when the material is made, none per query).
+    #[pyo3(signature = (x, blend = "floor"))]
     fn material(&self, py: Python<'_>, x: &Bound<'_, PyAny>, blend: &str) -> PyResult<PyMaterial> {
         let (x, rule) = (point(x)?, rule_of(blend)?);
         let label = match rule {
-            BlendRule::Gp => format!("at {x:?} of {}", self.inner.path().display()),
+            BlendRule::Floor => format!("at {x:?} of {}", self.inner.path().display()),
             rule => format!("at {x:?} of {} ({} blend)", self.inner.path().display(), rule.name()),
         };
         let b = py.detach(|| self.blend(&x, rule))?;
@@ -235,7 +238,7 @@ impl PyModel {
     /// with NaN where no material was measured, or with `raw=True` the
     /// values `brdf-atlas reconstruct` writes (MERL's channel scales not
     /// applied, -1 where unmeasured). `blend` as for `material`.
-    #[pyo3(signature = (x, raw = false, blend = "gp"))]
+    #[pyo3(signature = (x, raw = false, blend = "floor"))]
     fn table<'py>(
         &self,
         py: Python<'py>,
@@ -257,7 +260,7 @@ impl PyModel {
     /// float64, zero where a direction is at or below the horizon or the bin
     /// was never measured; the nearest bin, as `brdf-atlas eval`. `blend`
     /// as for `material`.
-    #[pyo3(signature = (x, wi, wo, blend = "gp"))]
+    #[pyo3(signature = (x, wi, wo, blend = "floor"))]
     fn eval<'py>(
         &self,
         py: Python<'py>,
@@ -286,10 +289,12 @@ impl PyModel {
     /// `view = (x0, x1, y0, y1)` (default: the box [-1, 1]^2 with a 10%
     /// margin): linear RGB albedo, (height, width, 3) float32, row 0 at the
     /// top (largest y). `samples`: quadrature points per pixel; None means
-    /// exact (blended per-material albedos) for a raw model's GP blend and
-    /// 256 otherwise. `blend`: the material each pixel shows, "gp" or
-    /// "floor" (the plausible rule has no map). 2-D models only.
-    #[pyo3(signature = (width = 256, height = 256, view = None, samples = None, blend = "gp"))]
+    /// the library's default (the albedo field where it fits its budget, 256
+    /// samples a pixel otherwise; exact, from blended per-material albedos,
+    /// for a raw model's GP blend). `blend`: the material each pixel shows,
+    /// "floor" (the default, what `material` gives) or "gp" (the plausible
+    /// rule has no map). 2-D models only.
+    #[pyo3(signature = (width = 256, height = 256, view = None, samples = None, blend = "floor"))]
     fn albedo_map<'py>(
         &self,
         py: Python<'py>,

@@ -43,8 +43,13 @@ def render(bsdf, *, spp, res=16, seed=0, view=(0.0, 0.0, 1.0)):
 
 
 def at(model, name):
+    """The BSDF of the GP's blend at material `name`'s latent point: the GP
+    reproduces the material there (to its noise), which the renders below
+    are checked against; the default rule, the soft floor, lifts low values
+    by a share of a convex blend of the neighbours."""
     x, y = point_of(model, name)
-    return {"type": "brdf_atlas", "model": str(model.path), "x": float(x), "y": float(y)}
+    return {"type": "brdf_atlas", "model": str(model.path), "x": float(x), "y": float(y),
+            "blend": "gp"}
 
 
 @pytest.mark.parametrize("variant", VARIANTS)
@@ -104,7 +109,7 @@ def test_a_plausible_point_renders_as_the_file_reconstruct_writes(log_model, cli
     import subprocess
     x = [0.9, -0.95]
     # The rule moves this point's weights (else this compares GP materials).
-    assert not np.array_equal(log_model.table(x, blend="plausible"), log_model.table(x))
+    assert not np.array_equal(log_model.table(x, blend="plausible"), log_model.table(x, blend="gp"))
     out = tmp_path / "plausible.binary"
     subprocess.run([str(cli), "reconstruct", str(log_model.path), "--at", f"{x[0]!r},{x[1]!r}",
                     "--blend", "plausible", "-o", str(out)], check=True, capture_output=True)
@@ -116,5 +121,14 @@ def test_a_plausible_point_renders_as_the_file_reconstruct_writes(log_model, cli
     from_file, _ = render({"type": "brdf_atlas", "filename": str(out)}, spp=spp, seed=3, view=view)
     # The same samples of the same values (the file rounds them to MERL's doubles).
     assert np.allclose(plausible, from_file, rtol=1e-6, atol=0), (plausible, from_file)
+    # Without a rule, the default one: the soft floor, as `reconstruct` writes by default.
+    out = tmp_path / "default.binary"
+    subprocess.run([str(cli), "reconstruct", str(log_model.path), "--at", f"{x[0]!r},{x[1]!r}",
+                    "-o", str(out)], check=True, capture_output=True)
+    default, _ = render(bsdf, spp=spp, seed=3, view=view)
+    floor, _ = render(dict(bsdf, blend="floor"), spp=spp, seed=3, view=view)
+    from_file, _ = render({"type": "brdf_atlas", "filename": str(out)}, spp=spp, seed=3, view=view)
+    assert np.array_equal(default, floor)
+    assert np.allclose(default, from_file, rtol=1e-6, atol=0), (default, from_file)
     with pytest.raises(Exception, match='blend rule "convex"'):
         mi.load_dict(dict(bsdf, blend="convex"))
