@@ -5,8 +5,9 @@
 //! cargo run --release -p brdf-atlas-core --example plausibility -- MODEL [POINTS] [SEED]
 //! ```
 //!
-//! `PLAUSIBILITY_RULES=gp,plausible` chooses the rules swept (both by
-//! default). Prints, per rule, the distribution (median, 90th, 99th percentile, worst)
+//! `PLAUSIBILITY_RULES=floor,gp` chooses the rules swept (by default all
+//! three: floor, the default, gp and plausible). `PLAUSIBILITY_LOO=1` adds
+//! the leave-one-out errors of the rules. Prints, per rule, the distribution (median, 90th, 99th percentile, worst)
 //! of the clamped share of reflectance, the clamped share of values and the
 //! largest directional albedo, and how many points are low-confidence.
 
@@ -126,7 +127,7 @@ fn sweep(model: &Model, points: usize, seed: u64) -> Result<(), Box<dyn std::err
     // `PLAUSIBILITY_RULES=plausible` (a comma-separated list) to sweep fewer rules.
     let rules: Vec<BlendRule> = match std::env::var("PLAUSIBILITY_RULES") {
         Ok(list) => list.split(',').filter_map(BlendRule::parse).collect(),
-        Err(_) => vec![BlendRule::Gp, BlendRule::Plausible],
+        Err(_) => vec![BlendRule::Floor, BlendRule::Gp, BlendRule::Plausible],
     };
     for rule in rules {
         let start = std::time::Instant::now();
