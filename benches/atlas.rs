@@ -11,7 +11,7 @@ mod common;
 use std::hint::black_box;
 use std::path::Path;
 
-use brdf_atlas_core::View;
+use brdf_atlas_core::{BlendRule, View};
 use brdf_atlas_core::{FitOptions, fit_dir};
 use brdf_atlas_core::{
     GplvmParams, GramData, Model, NoProgress, OptimizerKind, Precision, TransformKind,
@@ -101,13 +101,21 @@ fn atlas(c: &mut Criterion) {
 
     let mut g = c.benchmark_group("map");
     g.sample_size(10);
+    // The GP blend's map of a raw model: exact and linear in the weights.
     g.bench_function("raw_linear_1024", |b| {
         b.iter(|| {
-            raw.albedo_map(1024, 1024, View::default(), None, &NoProgress)
-                .expect("map")
+            raw.albedo_map_with(
+                1024,
+                1024,
+                View::default(),
+                None,
+                BlendRule::Gp,
+                &NoProgress,
+            )
+            .expect("map")
         })
     });
-    // The default log map of 1024 x 1024 pixels: of the default view (a
+    // The default log map (the soft floor's material) of 1024 x 1024 pixels: of the default view (a
     // field there would cost more than the per-pixel rule, which it falls
     // back to), and of a view a hundred times smaller, the albedo field,
     // first as built from scratch (`build_field`: its exact nodes, the cost

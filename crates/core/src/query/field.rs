@@ -262,7 +262,8 @@ impl Model {
     /// is then judged not to fit in its budget either (the plan's values
     /// come from another rule, so this is a judgement, not a bound).
     pub fn plan_field(&self, domain: View, budget: usize) -> Result<Option<usize>> {
-        self.plan(domain, budget, false, &NoProgress)
+        let floor = floor_of(BlendRule::default())?;
+        self.plan(domain, budget, floor, &NoProgress)
     }
 
     fn plan(
@@ -307,10 +308,12 @@ impl Model {
         Ok(patches.map(|p| (p, nodes)))
     }
 
-    /// Build the field of `domain` (no cache), or `None` if its albedo would
-    /// need more than `budget` exact nodes.
+    /// Build the field of `domain` for the default rule's material (no
+    /// cache), or `None` if its albedo would need more than `budget` exact
+    /// nodes.
     pub fn build_field(&self, domain: View, budget: usize) -> Result<Option<AlbedoField>> {
-        self.build(domain, budget, false, &NoProgress)
+        let floor = floor_of(BlendRule::default())?;
+        self.build(domain, budget, floor, &NoProgress)
     }
 
     fn build(
