@@ -36,7 +36,8 @@ fn swatches(c: &mut Criterion) {
     let mut g = c.benchmark_group("swatches");
     g.sample_size(10);
     for (name, rule) in [
-        ("sheet_8x8_128px", BlendRule::Gp),
+        ("sheet_8x8_128px", BlendRule::Floor),
+        ("sheet_8x8_128px_gp", BlendRule::Gp),
         ("sheet_8x8_128px_plausible", BlendRule::Plausible),
     ] {
         g.bench_function(name, |b| {
