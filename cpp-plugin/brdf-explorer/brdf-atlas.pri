@@ -14,6 +14,7 @@ HEADERS += \
     $$PWD/brdf_atlas.hpp
 SOURCES += \
     $$PWD/AtlasMapWidget.cpp \
+    $$PWD/AtlasPanel.cpp \
     $$PWD/AtlasFiles.cpp \
     $$PWD/AtlasStatus.cpp \
     $$PWD/AtlasGlue.cpp \

@@ -40,89 +40,7 @@
 
 #include "AtlasMapWidget.h"
 #include "AtlasStatus.h"
-
-namespace {
-
-// The C library's own answer at (x, y), through a handle of its own: under
-// the library's default rule, the soft floor, from the plain
-// brdf_atlas_model_reconstruct; under another, from _reconstruct_with.
-std::vector<double> referenceTable(const QString &model, double x, double y,
-                                   std::int32_t blend = BRDF_ATLAS_BLEND_FLOOR) {
-    BrdfAtlasModel *h = nullptr;
-    if (brdf_atlas_model_open(model.toUtf8().constData(), &h) != BRDF_ATLAS_STATUS_OK) {
-        qFatal("brdf_atlas_model_open: %s", brdf_atlas_last_error_message());
-    }
-    std::size_t len = 0;
-    brdf_atlas_model_table_len(h, &len);
-    std::vector<double> t(len);
-    std::size_t written = 0;
-    const BrdfAtlasStatus s = blend == BRDF_ATLAS_BLEND_FLOOR
-                                  ? brdf_atlas_model_reconstruct(h, x, y, t.data(), t.size(), &written)
-                                  : brdf_atlas_model_reconstruct_with(h, x, y, blend, t.data(), t.size(), &written);
-    if (s != BRDF_ATLAS_STATUS_OK || written != len) {
-        qFatal("brdf_atlas_model_reconstruct: %s", brdf_atlas_last_error_message());
-    }
-    brdf_atlas_model_free(h);
-    return t;
-}
-
-QByteArray readAll(const QString &path) {
-    QFile f(path);
-    if (!f.open(QIODevice::ReadOnly)) qFatal("cannot read %s", qPrintable(path));
-    return f.readAll();
-}
-
-// The C library's plausibility at (x, y), through a handle of its own.
-BrdfAtlasPlausibility referencePlausibility(const QString &model, double x, double y,
-                                            std::int32_t blend = BRDF_ATLAS_BLEND_FLOOR) {
-    BrdfAtlasModel *h = nullptr;
-    if (brdf_atlas_model_open(model.toUtf8().constData(), &h) != BRDF_ATLAS_STATUS_OK) {
-        qFatal("brdf_atlas_model_open: %s", brdf_atlas_last_error_message());
-    }
-    BrdfAtlasPlausibility p{};
-    if (brdf_atlas_model_plausibility(h, x, y, blend, &p) != BRDF_ATLAS_STATUS_OK) {
-        qFatal("brdf_atlas_model_plausibility: %s", brdf_atlas_last_error_message());
-    }
-    brdf_atlas_model_free(h);
-    return p;
-}
-
-// Rewrite `path` in place (the same file truncated, then written), as `cp`
-// or a shell redirection over it does.
-void rewriteInPlace(const QString &path, const QByteArray &bytes) {
-    QFile f(path);
-    if (!f.open(QIODevice::WriteOnly | QIODevice::Truncate) || f.write(bytes) != bytes.size())
-        qFatal("cannot rewrite %s", qPrintable(path));
-}
-
-// Press Validate and wait for the outcome. Returns the failure message, or
-// empty.
-QString validateAtMarker(AtlasPanel *panel) {
-    QSignalSpy done(panel, &AtlasPanel::reconstructed);
-    QSignalSpy failed(panel, &AtlasPanel::failed);
-    QTest::mouseClick(panel->validateButton(), Qt::LeftButton);
-    if (!QTest::qWaitFor([&] { return done.count() + failed.count() > 0; }, 120000))
-        qFatal("no outcome from Validate");
-    return failed.isEmpty() ? QString() : failed.first().first().toString();
-}
-
-// Click the view half-way between its first two materials, then Validate.
-QString validateBetweenMaterials(AtlasPanel *panel) {
-    AtlasMapView *view = panel->mapView();
-    const QPointF mid = (view->materialPoints()[0] + view->materialPoints()[1]) / 2;
-    QTest::mouseClick(view, Qt::LeftButton, Qt::NoModifier, view->latentToWidget(mid).toPoint());
-    return validateAtMarker(panel);
-}
-
-// Choose the blend rule shown as `label` in the panel's combo box.
-void chooseBlend(AtlasPanel *panel, const char *label) {
-    QComboBox *box = panel->blendBox();
-    const int i = box->findText(QString::fromUtf8(label));
-    if (i < 0) qFatal("no blend rule \"%s\" in the panel", label);
-    box->setCurrentIndex(i);
-}
-
-}  // namespace
+#include "atlas_test_support.h"
 
 class TestAtlasMap : public QObject {
     Q_OBJECT
@@ -131,36 +49,6 @@ private:
     QTemporaryDir settings_;
     AtlasPanel *panel_ = nullptr;
     AtlasMapView *view_ = nullptr;
-
-    // The panel's plausibility line states what the library says at the
-    // marker: the same numbers, the verdict and its colour, low confidence.
-    void checkPlausibilityShown(AtlasPanel *panel, std::int32_t blend = BRDF_ATLAS_BLEND_FLOOR) {
-        const QPointF m = panel->mapView()->marker();
-        const BrdfAtlasPlausibility want = referencePlausibility(modelPath_, m.x(), m.y(), blend);
-        const AtlasReconstruction &r = panel->lastReconstruction();
-        QCOMPARE(r.x, m.x());
-        QCOMPARE(r.y, m.y());
-        // The numbers handed out with the table are the library's, bit for bit.
-        QVERIFY(std::memcmp(&r.plausibility, &want, sizeof want) == 0);
-        const QLabel *label = panel->plausibilityLabel();
-        const QString text = label->text();
-        qInfo("plausibility at (%g, %g): %s", m.x(), m.y(), qPrintable(text));
-        QVERIFY(label->isVisibleTo(panel) && label->isEnabled());
-        QCOMPARE(text, atlasPlausibilityText(want));
-        const QString share =
-            want.clamped_reflectance > 0 ? atlasPercentText(want.clamped_reflectance) : QStringLiteral("none");
-        QVERIFY2(text.contains(share + " of the reflectance") &&
-                     text.contains(QString::number(want.max_albedo_incidence, 'f', 0) + QChar(0x00B0)),
-                 qPrintable(text));
-        QVERIFY2(text.contains(QString::number(want.max_albedo, 'f', 2)) ||
-                     text.contains(QString::number(want.max_albedo, 'g', 6)),
-                 qPrintable(text));
-        QCOMPARE(text.startsWith("Plausible: "), want.plausible != 0);
-        QCOMPARE(text.startsWith("Not plausible: "), want.plausible == 0);
-        QCOMPARE(label->styleSheet().contains("c03030"), want.plausible == 0);
-        QCOMPARE(text.contains("knows little here"), want.low_confidence != 0);
-        if (want.low_confidence) QVERIFY(text.contains(QString::number(want.variance, 'f', 2)));
-    }
 
     // Wait for the map of the window shown now (layouts settled first).
     void waitForMap() {
@@ -282,18 +170,6 @@ private slots:
                 frames << Frame{level, ms, view_->mapImage(), view_->mapWindow()};
             });
         const brdf_atlas::Model m(modelPath_.toStdString());
-        auto sameAsLibrary = [&](const Frame &f, std::size_t samples) {
-            const brdf_atlas::View v{f.window.x0, f.window.x1, f.window.y0, f.window.y1};
-            const int w = f.image.width(), h = f.image.height();
-            const std::vector<float> rgb = m.albedo_map(w, h, v, samples);
-            const std::vector<float> variance = m.variance_map(w, h, v);
-            for (int y = 0; y < h; ++y)
-                for (int x = 0; x < w; ++x) {
-                    const std::size_t p = std::size_t(y) * w + x;
-                    if (f.image.pixel(x, y) != atlasPixel(&rgb[3 * p], variance[p])) return false;
-                }
-            return true;
-        };
         const QSize full(view_->mapImage().size());
         const QSize preview((full.width() + AtlasMapView::kPreviewDivisor - 1) / AtlasMapView::kPreviewDivisor,
                             (full.height() + AtlasMapView::kPreviewDivisor - 1) / AtlasMapView::kPreviewDivisor);
@@ -303,10 +179,10 @@ private slots:
             const Frame &first = frames.first(), &last = frames.last();
             QCOMPARE(first.level, AtlasMapView::kPreview);
             QCOMPARE(first.image.size(), preview);
-            QVERIFY2(sameAsLibrary(first, AtlasMapView::kPreviewSamples), gesture);
+            QVERIFY2(sameAsLibraryMap(m, first.image, first.window, AtlasMapView::kPreviewSamples), gesture);
             QCOMPARE(last.level, AtlasMapView::kFull);
             QCOMPARE(last.image.size(), full);
-            QVERIFY2(sameAsLibrary(last, 0), gesture);
+            QVERIFY2(sameAsLibraryMap(m, last.image, last.window, 0), gesture);
             const BrdfAtlasView w = view_->window();
             QVERIFY(last.window.x0 == w.x0 && last.window.y1 == w.y1);
             QCOMPARE(view_->frameLatencyMs(AtlasMapView::kFull), last.ms);
@@ -411,7 +287,7 @@ private slots:
     void plausibilityIsShownUnderValidate() {
         const QString error = validateBetweenMaterials(panel_);
         QVERIFY2(error.isEmpty(), qPrintable(error));
-        checkPlausibilityShown(panel_);
+        checkPlausibilityShown(modelPath_, panel_);
     }
 
     void steppedRuleIsValidatedWhenChosen() {
@@ -440,7 +316,7 @@ private slots:
         const AtlasReconstruction &r = panel_->lastReconstruction();
         QCOMPARE(r.blend, BRDF_ATLAS_BLEND_PLAUSIBLE);
         QVERIFY(*r.table == referenceTable(modelPath_, at.x(), at.y(), BRDF_ATLAS_BLEND_PLAUSIBLE));
-        checkPlausibilityShown(panel_, BRDF_ATLAS_BLEND_PLAUSIBLE);
+        checkPlausibilityShown(modelPath_, panel_, BRDF_ATLAS_BLEND_PLAUSIBLE);
         QVERIFY2(panel_->statusLabel()->text().contains("(stepped plausible rule)"),
                  qPrintable(panel_->statusLabel()->text()));
     }
@@ -559,7 +435,7 @@ private slots:
         QVERIFY2(*r.table == gp, "the widget's GP table differs from brdf_atlas_model_reconstruct_with's");
         QVERIFY2(gp != referenceTable(modelPath_, at.x(), at.y()), "the GP's table is the default floor's");
         QVERIFY2(panel_->statusLabel()->text().contains("(GP blend)"), qPrintable(panel_->statusLabel()->text()));
-        checkPlausibilityShown(panel_, BRDF_ATLAS_BLEND_GP);
+        checkPlausibilityShown(modelPath_, panel_, BRDF_ATLAS_BLEND_GP);
         QLabel *label = panel_->plausibilityLabel();
         QVERIFY2(label->text().startsWith("Not plausible: "), qPrintable(label->text()));
         // Squeezed to its minimum size, the panel still shows every text
