@@ -227,8 +227,14 @@ private slots:
 
     void clickSetsTheMarker() {
         QVERIFY(!panel_->validateButton()->isEnabled());
-        // Between two materials: half-way from the first to the second.
+        // Between two materials: half-way from the first to the second,
+        // brought into view if the zooms and pans before left it outside
+        // (with a model of many materials the two may lie far apart).
         const QPointF mid = (view_->materialPoints()[0] + view_->materialPoints()[1]) / 2;
+        if (!view_->rect().contains(view_->latentToWidget(mid).toPoint())) {
+            view_->setWindow(mid, view_->scale());
+            waitForMap();
+        }
         const QPoint at = view_->latentToWidget(mid).toPoint();
         QVERIFY(view_->rect().contains(at));
         const QPointF expected = view_->widgetToLatent(at);
