@@ -132,13 +132,13 @@ fn sweep(model: &Model, points: usize, seed: u64) -> Result<(), Box<dyn std::err
     for rule in rules {
         let start = std::time::Instant::now();
         let (mut refl, mut vals, mut alb, mut low) = (vec![], vec![], vec![], 0);
-        for x in &xs {
-            let blend = model.at_with(x, rule)?;
-            let p = blend.plausibility()?;
+        // Every point's figures from one pass over the store (the plausible
+        // rule: its steps from one pass, then a pass a point).
+        for (x, p) in xs.iter().zip(model.plausibilities(&xs, rule)?) {
             refl.push(p.clamped_reflectance);
             vals.push(p.clamped_values);
             alb.push(p.max_albedo);
-            low += usize::from(blend.confidence().is_low());
+            low += usize::from(model.at(x)?.confidence().is_low());
         }
         println!(
             "{} ({} points, {:.1} s):",

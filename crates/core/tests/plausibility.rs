@@ -410,3 +410,47 @@ fn many_points_in_one_pass_take_the_steps_each_takes_alone() {
         assert!(moved > 0, "{transform:?}: no point moved the weights");
     }
 }
+
+#[test]
+fn many_points_in_one_pass_have_the_figures_each_has_alone() {
+    let tmp = tempfile::tempdir().unwrap();
+    for transform in [TransformKind::Raw, TransformKind::Log] {
+        let m = Model::open(fit(tmp.path(), 12, transform)).unwrap();
+        // More points than a product's tile, the test points and one far
+        // from every material among them.
+        let mut points: Vec<[f64; 2]> = POINTS.iter().map(|p| [p[0], p[1]]).collect();
+        points.push([4.0, -3.5]);
+        points.extend((0..9).map(|k| {
+            let a = k as f64 * 0.61;
+            [1.2 * a.cos(), 0.8 * (1.9 * a).sin()]
+        }));
+        let mut clamped = 0;
+        for rule in [BlendRule::Floor, BlendRule::Gp, BlendRule::Plausible] {
+            let together = m.plausibilities(&points, rule).unwrap();
+            assert_eq!(together.len(), points.len());
+            for (x, got) in points.iter().zip(&together) {
+                let want = m.at_with(x, rule).unwrap().plausibility().unwrap();
+                let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs() + 1e-12;
+                assert!(
+                    close(got.clamped_reflectance, want.clamped_reflectance)
+                        && close(got.clamped_values, want.clamped_values),
+                    "{transform:?} {rule:?} {x:?}: {got:?} against {want:?}"
+                );
+                assert_eq!(
+                    got.max_albedo, want.max_albedo,
+                    "{transform:?} {rule:?} {x:?}"
+                );
+                assert_eq!(got.max_albedo_incidence, want.max_albedo_incidence);
+                clamped += usize::from(want.clamped_reflectance > 0.0);
+                if rule == BlendRule::Floor {
+                    assert_eq!(got.clamped_reflectance, 0.0, "{transform:?} {x:?}");
+                }
+            }
+        }
+        // The GP clamps somewhere, so the sums were put to the test.
+        assert!(clamped > 0, "{transform:?}: nothing clamped anywhere");
+    }
+    let m = Model::open(fit(tmp.path(), 12, TransformKind::Log)).unwrap();
+    assert!(m.plausibilities(&[], BlendRule::Floor).unwrap().is_empty());
+    assert!(m.plausibilities(&[[f64::NAN, 0.0]], BlendRule::Gp).is_err());
+}

@@ -136,30 +136,8 @@ impl Model {
         if m == 0 {
             return Ok(Vec::new());
         }
-        for p in points {
-            self.kernel_and_weights_at(p)?;
-        }
-        let (latent, kernel) = (self.latent(), self.file().kernel);
-        let n = latent.nrows();
-        let kx = Mat::from_fn(n, m, |i, j| {
-            kernel.eval(&[latent[(i, 0)], latent[(i, 1)]], &points[j])
-        });
-        let w = self.llt_solve(&kx);
-        // W^T column-major (m x n), so a block's values are W^T Z_block.
-        let a: Vec<f64> = (0..n)
-            .flat_map(|t| (0..m).map(move |j| (t, j)))
-            .map(|(t, j)| w[(t, j)])
-            .collect();
-        // The convex weights of every point, laid out as `a` is, for the floor.
-        let av: Vec<f64> = if floor {
-            let v = self.convex_weights_at(points);
-            (0..n)
-                .flat_map(|t| (0..m).map(move |j| (t, j)))
-                .map(|(t, j)| v[j][t])
-                .collect()
-        } else {
-            Vec::new()
-        };
+        let n = self.latent().nrows();
+        let (a, av) = self.pass_weights(points, floor)?;
         let store = self.store();
         let mean = store.mean();
         // Products in f64 through the library's own kernel (faer's would
@@ -216,6 +194,43 @@ impl Model {
         }
         self.verify()?;
         Ok(out)
+    }
+}
+
+impl Model {
+    /// The weights of a pass over the store at `points`: the GP's `K^-1
+    /// k(x)` of every point laid out `n x m` row-major (material `t`, point
+    /// `j` at `t m + j`), so that a block of store rows `Z_block` (`len x
+    /// n`) gives the points' values as one product; and, if `floor`, the
+    /// convex weights laid out alike (else empty).
+    pub(crate) fn pass_weights(
+        &self,
+        points: &[[f64; 2]],
+        floor: bool,
+    ) -> Result<(Vec<f64>, Vec<f64>)> {
+        for p in points {
+            self.kernel_and_weights_at(p)?;
+        }
+        let (latent, kernel) = (self.latent(), self.file().kernel);
+        let (n, m) = (latent.nrows(), points.len());
+        let kx = Mat::from_fn(n, m, |i, j| {
+            kernel.eval(&[latent[(i, 0)], latent[(i, 1)]], &points[j])
+        });
+        let w = self.llt_solve(&kx);
+        let a: Vec<f64> = (0..n)
+            .flat_map(|t| (0..m).map(move |j| (t, j)))
+            .map(|(t, j)| w[(t, j)])
+            .collect();
+        let av: Vec<f64> = if floor {
+            let v = self.convex_weights_at(points);
+            (0..n)
+                .flat_map(|t| (0..m).map(move |j| (t, j)))
+                .map(|(t, j)| v[j][t])
+                .collect()
+        } else {
+            Vec::new()
+        };
+        Ok((a, av))
     }
 }
 

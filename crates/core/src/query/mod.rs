@@ -20,6 +20,7 @@ pub mod sheet;
 mod sidecar;
 mod steps;
 pub mod swatch;
+mod sweep;
 mod view;
 
 pub use contour::{Segment, contour_levels, contours, luminance};

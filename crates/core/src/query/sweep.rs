@@ -1,0 +1,138 @@
+//! The plausibility figures of many latent points in one pass over the
+//! store: what the report's grid and a sweep of random points ask for.
+//!
+//! [`Blend::plausibility`] reads the whole store for one point. For the
+//! GP's blend and the soft floor the values of a block of store rows at
+//! every point are one product with the points' weights (as the exact
+//! albedos are, [`crate::query::exact`]), so `m` points cost one pass and a
+//! product instead of `m` passes. The largest directional albedo reads only
+//! the directional rule's bins, point by point.
+
+use brdf_merl::directional::largest;
+
+use crate::data::transform::InverseForm;
+use crate::dense::product::matmul;
+use crate::error::Result;
+use crate::model::Model;
+use crate::query::exact::floor_of;
+use crate::query::floor::floor_points;
+use crate::query::plausibility::{BlendRule, Plausibility};
+use crate::simd::fold::{GROUPS, ordered_blocks};
+
+/// Rows of the store a step of the pass multiplies at once.
+const BLOCK: usize = 256;
+
+/// Per point: reflectance removed by the clamp, total reflectance (both
+/// cosine-weighted), values below zero.
+#[derive(Clone, Copy, Default)]
+struct Sums {
+    removed: f64,
+    total: f64,
+    negative: f64,
+}
+
+impl Model {
+    /// [`Blend::plausibility`](crate::Blend::plausibility) of the material
+    /// `rule` forms at each of `points`. The GP's blend and the soft floor
+    /// take one pass over the store for all the points; the plausible
+    /// rule's steps need passes of their own ([`Model::plausible_blends`]
+    /// makes all the points' blends in one), then each point's figures. The
+    /// sums run in a fixed order: the answer does not depend on the thread
+    /// count, and equals the one-point figures to rounding.
+    pub fn plausibilities(
+        &self,
+        points: &[[f64; 2]],
+        rule: BlendRule,
+    ) -> Result<Vec<Plausibility>> {
+        if rule == BlendRule::Plausible {
+            let points: Vec<Vec<f64>> = points.iter().map(|p| p.to_vec()).collect();
+            return self
+                .plausible_blends(&points)?
+                .iter()
+                .map(|b| b.plausibility())
+                .collect();
+        }
+        let floor = floor_of(rule)?;
+        self.store().verify_cheap()?;
+        let m = points.len();
+        if m == 0 {
+            return Ok(Vec::new());
+        }
+        let (a, av) = self.pass_weights(points, floor)?;
+        let store = self.store();
+        let (n, bins) = (store.n(), self.dims().bins());
+        let (mean, unmeasured) = (store.mean(), store.unmeasured());
+        let cosines = self.cosine_products();
+        let transform = self.transform();
+        let parts = ordered_blocks(
+            store.rows(),
+            BLOCK,
+            GROUPS,
+            || vec![Sums::default(); m],
+            |acc, range| {
+                let len = range.len();
+                let mut z = vec![0.0f64; n * len];
+                store.copy_rows(range.start, &mut z);
+                let mut t = vec![0.0f64; m * len];
+                matmul(&mut t, &a, &z, n);
+                let mut v = Vec::new();
+                if floor {
+                    v.resize(m * len, 0.0);
+                    matmul(&mut v, &av, &z, n);
+                }
+                for (k, row) in range.enumerate() {
+                    if unmeasured[row] != 0 {
+                        continue;
+                    }
+                    let (mu, bin) = (mean[row], row % bins);
+                    let t = &mut t[k * m..(k + 1) * m];
+                    if floor {
+                        floor_points(t, &v[k * m..(k + 1) * m], mu);
+                    }
+                    let c = cosines[bin];
+                    let form = transform.inverse_form(bin);
+                    for (s, &t) in acc.iter_mut().zip(t.iter()) {
+                        let g = mu + t;
+                        // As the one-point figures: the sign of the value is
+                        // the sign of `g` for either form.
+                        let f = match form {
+                            InverseForm::Linear(scale) => scale * g,
+                            InverseForm::Exp(scale) => scale * g.exp_m1(),
+                        };
+                        s.removed += (-f).max(0.0) * c;
+                        s.total += f.abs() * c;
+                        s.negative += f64::from(u8::from(f < 0.0));
+                    }
+                }
+            },
+        );
+        let mut sums = vec![Sums::default(); m];
+        for part in parts {
+            for (s, p) in sums.iter_mut().zip(part) {
+                s.removed += p.removed;
+                s.total += p.total;
+                s.negative += p.negative;
+            }
+        }
+        let measured = unmeasured.iter().filter(|&&u| u == 0).count() as f64;
+        let share = |a: f64, b: f64| if b > 0.0 { a / b } else { 0.0 };
+        let directional = self.directional_rule();
+        let out = points
+            .iter()
+            .zip(sums)
+            .map(|(x, s)| {
+                let blend = self.at_with(x, rule)?;
+                let (max_albedo, max_albedo_incidence) =
+                    largest(&directional.integrate(|b| blend.rgb_once(b).unwrap_or([0.0; 3])));
+                Ok(Plausibility {
+                    clamped_reflectance: share(s.removed, s.total),
+                    clamped_values: share(s.negative, measured),
+                    max_albedo,
+                    max_albedo_incidence,
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        self.verify()?;
+        Ok(out)
+    }
+}
