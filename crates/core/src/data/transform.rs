@@ -117,6 +117,18 @@ pub enum InverseForm {
     Exp(f64),
 }
 
+impl InverseForm {
+    /// The value of transformed `t` before the clamp to `>= 0`: negative
+    /// exactly when `t` is (both scales are positive).
+    #[inline]
+    pub fn unclamped(self, t: f64) -> f64 {
+        match self {
+            InverseForm::Linear(s) => s * t,
+            InverseForm::Exp(s) => s * t.exp_m1(),
+        }
+    }
+}
+
 /// `cos(theta_i) cos(theta_o)` of every bin of `dims`, at its representative
 /// angles, clamped at 0.
 pub(crate) fn cosine_products(dims: Dims) -> Vec<f64> {

@@ -14,7 +14,6 @@ use brdf_merl::DirectionalRule;
 use brdf_merl::directional::{INCIDENCE_DEGREES, largest};
 
 use crate::data::store::Store;
-use crate::data::transform::InverseForm;
 use crate::dense::product::matmul;
 use crate::error::Result;
 use crate::query::budget::STEPS;
@@ -125,11 +124,7 @@ fn albedos(
                         for (fi, &f) in floors.iter().enumerate() {
                             let t = steps[band * n + i].max(f);
                             let y = g + t * (c - g);
-                            let v = match form {
-                                InverseForm::Linear(s) => s * y,
-                                InverseForm::Exp(s) => s * y.exp_m1(),
-                            }
-                            .max(0.0);
+                            let v = form.unclamped(y).max(0.0);
                             let acc = &mut sums[mi * nf + fi];
                             for &(k, w) in pairs {
                                 acc[k][ch] += w * v;

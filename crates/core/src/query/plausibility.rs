@@ -20,7 +20,6 @@ use brdf_merl::directional::largest;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::data::transform::InverseForm;
 use crate::error::Result;
 use crate::model::Model;
 use crate::query::reconstruct::Blend;
@@ -180,7 +179,7 @@ impl Blend<'_> {
         let (rows, bins) = (store.rows(), model.dims().bins());
         let unmeasured = store.unmeasured();
         let cosines = model.cosine_products();
-        let parts: Vec<[f64; 4]> = (0..rows.div_ceil(CHUNK))
+        let parts: Vec<ClampSums> = (0..rows.div_ceil(CHUNK))
             .into_par_iter()
             .map_init(
                 || vec![0.0; CHUNK],
@@ -188,43 +187,68 @@ impl Blend<'_> {
                     let r0 = k * CHUNK;
                     let len = CHUNK.min(rows - r0);
                     self.transformed_rows(r0, &mut t[..len]);
-                    // [removed, total, values clamped, values measured]
-                    let mut acc = [0.0f64; 4];
+                    let mut acc = ClampSums::default();
                     for (row, &v) in (r0..r0 + len).zip(t.iter()) {
-                        if unmeasured[row] != 0 {
-                            continue;
+                        if unmeasured[row] == 0 {
+                            let bin = row % bins;
+                            let f = model.transform().inverse_form(bin).unclamped(v);
+                            acc.add(f, cosines[bin]);
                         }
-                        let bin = row % bins;
-                        let f = match model.transform().inverse_form(bin) {
-                            InverseForm::Linear(s) => s * v,
-                            InverseForm::Exp(s) => s * v.exp_m1(),
-                        };
-                        let c = cosines[bin];
-                        acc[0] += (-f).max(0.0) * c;
-                        acc[1] += f.abs() * c;
-                        acc[2] += f64::from(u8::from(f < 0.0));
-                        acc[3] += 1.0;
                     }
                     acc
                 },
             )
             .collect();
-        let mut sum = [0.0f64; 4];
-        for p in &parts {
-            for (s, v) in sum.iter_mut().zip(p) {
-                *s += v;
-            }
-        }
-        let share = |a: f64, b: f64| if b > 0.0 { a / b } else { 0.0 };
+        let mut sums = ClampSums::default();
+        parts.iter().for_each(|p| sums.merge(p));
         let rule = model.directional_rule();
         let (max_albedo, max_albedo_incidence) =
             largest(&rule.integrate(|b| self.rgb_once(b).unwrap_or([0.0; 3])));
         model.verify()?;
-        Ok(Plausibility {
-            clamped_reflectance: share(sum[0], sum[1]),
-            clamped_values: share(sum[2], sum[3]),
+        Ok(sums.figures(max_albedo, max_albedo_incidence))
+    }
+}
+
+/// The clamp's sums over the measured values of one material: what
+/// [`Plausibility`]'s shares are formed from.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct ClampSums {
+    /// Cosine-weighted reflectance the clamp removes.
+    removed: f64,
+    /// Cosine-weighted reflectance before the clamp, in absolute value.
+    total: f64,
+    /// Values below zero.
+    negative: f64,
+    /// Values summed.
+    values: f64,
+}
+
+impl ClampSums {
+    /// Count value `f` (before the clamp) of a bin with cosine product `c`.
+    #[inline]
+    pub(crate) fn add(&mut self, f: f64, c: f64) {
+        self.removed += (-f).max(0.0) * c;
+        self.total += f.abs() * c;
+        self.negative += f64::from(u8::from(f < 0.0));
+        self.values += 1.0;
+    }
+
+    /// Add the sums of another part of the values.
+    pub(crate) fn merge(&mut self, other: &ClampSums) {
+        self.removed += other.removed;
+        self.total += other.total;
+        self.negative += other.negative;
+        self.values += other.values;
+    }
+
+    /// The figures, with the largest directional albedo found elsewhere.
+    pub(crate) fn figures(&self, max_albedo: f64, max_albedo_incidence: f64) -> Plausibility {
+        let share = |a: f64, b: f64| if b > 0.0 { a / b } else { 0.0 };
+        Plausibility {
+            clamped_reflectance: share(self.removed, self.total),
+            clamped_values: share(self.negative, self.values),
             max_albedo,
             max_albedo_incidence,
-        })
+        }
     }
 }

@@ -10,26 +10,16 @@
 
 use brdf_merl::directional::largest;
 
-use crate::data::transform::InverseForm;
 use crate::dense::product::matmul;
 use crate::error::Result;
 use crate::model::Model;
 use crate::query::exact::floor_of;
 use crate::query::floor::floor_points;
-use crate::query::plausibility::{BlendRule, Plausibility};
+use crate::query::plausibility::{BlendRule, ClampSums, Plausibility};
 use crate::simd::fold::{GROUPS, ordered_blocks};
 
 /// Rows of the store a step of the pass multiplies at once.
 const BLOCK: usize = 256;
-
-/// Per point: reflectance removed by the clamp, total reflectance (both
-/// cosine-weighted), values below zero.
-#[derive(Clone, Copy, Default)]
-struct Sums {
-    removed: f64,
-    total: f64,
-    negative: f64,
-}
 
 impl Model {
     /// [`Blend::plausibility`](crate::Blend::plausibility) of the material
@@ -68,7 +58,7 @@ impl Model {
             store.rows(),
             BLOCK,
             GROUPS,
-            || vec![Sums::default(); m],
+            || vec![ClampSums::default(); m],
             |acc, range| {
                 let len = range.len();
                 let mut z = vec![0.0f64; n * len];
@@ -89,33 +79,17 @@ impl Model {
                     if floor {
                         floor_points(t, &v[k * m..(k + 1) * m], mu);
                     }
-                    let c = cosines[bin];
-                    let form = transform.inverse_form(bin);
+                    let (c, form) = (cosines[bin], transform.inverse_form(bin));
                     for (s, &t) in acc.iter_mut().zip(t.iter()) {
-                        let g = mu + t;
-                        // As the one-point figures: the sign of the value is
-                        // the sign of `g` for either form.
-                        let f = match form {
-                            InverseForm::Linear(scale) => scale * g,
-                            InverseForm::Exp(scale) => scale * g.exp_m1(),
-                        };
-                        s.removed += (-f).max(0.0) * c;
-                        s.total += f.abs() * c;
-                        s.negative += f64::from(u8::from(f < 0.0));
+                        s.add(form.unclamped(mu + t), c);
                     }
                 }
             },
         );
-        let mut sums = vec![Sums::default(); m];
+        let mut sums = vec![ClampSums::default(); m];
         for part in parts {
-            for (s, p) in sums.iter_mut().zip(part) {
-                s.removed += p.removed;
-                s.total += p.total;
-                s.negative += p.negative;
-            }
+            sums.iter_mut().zip(&part).for_each(|(s, p)| s.merge(p));
         }
-        let measured = unmeasured.iter().filter(|&&u| u == 0).count() as f64;
-        let share = |a: f64, b: f64| if b > 0.0 { a / b } else { 0.0 };
         let directional = self.directional_rule();
         let out = points
             .iter()
@@ -124,12 +98,7 @@ impl Model {
                 let blend = self.at_with(x, rule)?;
                 let (max_albedo, max_albedo_incidence) =
                     largest(&directional.integrate(|b| blend.rgb_once(b).unwrap_or([0.0; 3])));
-                Ok(Plausibility {
-                    clamped_reflectance: share(s.removed, s.total),
-                    clamped_values: share(s.negative, measured),
-                    max_albedo,
-                    max_albedo_incidence,
-                })
+                Ok(s.figures(max_albedo, max_albedo_incidence))
             })
             .collect::<Result<Vec<_>>>()?;
         self.verify()?;
