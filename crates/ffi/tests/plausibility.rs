@@ -2,7 +2,7 @@
 //! against the core library they wrap.
 
 use std::ffi::{CStr, CString};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::ptr::null_mut;
 
 use brdf_atlas_c::*;
@@ -20,18 +20,24 @@ fn open(path: &Path) -> *mut BrdfAtlasModel {
     h
 }
 
-#[test]
-fn plausibility_confidence_and_rules_are_the_core_library_s() {
-    let tmp = tempfile::tempdir().unwrap();
-    let data = tmp.path().join("data");
-    synth::write_dir(&data, 9, Dims::new(8, 8, 16).unwrap(), 4).unwrap();
-    let path = tmp.path().join("m.atlas");
+/// A 2-D model of `count` synthetic 8x8x16 materials (seed `seed`) in `dir`.
+fn fitted(dir: &Path, count: usize, seed: u64, transform: TransformKind) -> PathBuf {
+    let data = dir.join("data");
+    synth::write_dir(&data, count, Dims::new(8, 8, 16).unwrap(), seed).unwrap();
+    let path = dir.join("m.atlas");
     let options = FitOptions {
         params: GplvmParams::new(2).check().unwrap(),
-        transform: TransformKind::Log,
+        transform,
         precision: Precision::F64,
     };
     fit_dir(&data, &path, &options, &NoProgress).unwrap();
+    path
+}
+
+#[test]
+fn plausibility_confidence_and_rules_are_the_core_library_s() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = fitted(tmp.path(), 9, 4, TransformKind::Log);
     let model = Model::open(&path).unwrap();
     let h = open(&path);
     let len = model.dims().values();
@@ -108,15 +114,7 @@ fn plausibility_confidence_and_rules_are_the_core_library_s() {
 #[test]
 fn the_map_of_a_chosen_rule_is_the_core_library_s() {
     let tmp = tempfile::tempdir().unwrap();
-    let data = tmp.path().join("data");
-    synth::write_dir(&data, 7, Dims::new(8, 8, 16).unwrap(), 6).unwrap();
-    let path = tmp.path().join("m.atlas");
-    let options = FitOptions {
-        params: GplvmParams::new(2).check().unwrap(),
-        transform: TransformKind::Raw,
-        precision: Precision::F64,
-    };
-    fit_dir(&data, &path, &options, &NoProgress).unwrap();
+    let path = fitted(tmp.path(), 7, 6, TransformKind::Raw);
     let model = Model::open(&path).unwrap();
     let h = open(&path);
     let (w, ht) = (11, 9);
