@@ -2,43 +2,13 @@
 //! recomputation from the stored rows: its values, its plausibility, and
 //! its held-out errors.
 
-use std::path::{Path, PathBuf};
+mod common;
 
+use brdf_atlas_core::TransformKind;
 use brdf_atlas_core::floor::{FLOOR_SHARE, FLOOR_SOFTNESS};
 use brdf_atlas_core::loo::{self, CONVEX_LENGTH_RATIO};
-use brdf_atlas_core::{BlendRule, FitOptions, GplvmParams, Model, NoProgress, Precision};
-use brdf_atlas_core::{TransformKind, fit_dir};
-use brdf_merl::{Dims, synth};
-
-const DIMS: Dims = Dims {
-    theta_h: 12,
-    theta_d: 12,
-    phi_d: 24,
-};
-
-fn fit(dir: &Path, count: usize, transform: TransformKind) -> PathBuf {
-    let data = dir.join(format!("data-{count}"));
-    if !data.exists() {
-        synth::write_dir(&data, count, DIMS, 5).unwrap();
-    }
-    let model = dir.join(format!("{}-{count}.atlas", transform.name()));
-    let options = FitOptions {
-        params: GplvmParams::new(2).check().unwrap(),
-        transform,
-        precision: Precision::F64,
-    };
-    fit_dir(&data, &model, &options, &NoProgress).unwrap();
-    model
-}
-
-/// Points where the GP blend of the small synthetic models overshoots.
-const POINTS: [[f64; 2]; 5] = [
-    [0.31, -0.42],
-    [-0.9, 0.8],
-    [1.05, 1.05],
-    [-1.1, -0.2],
-    [0.0, 0.0],
-];
+use brdf_atlas_core::{BlendRule, Model, NoProgress};
+use common::{DIMS, POINTS, fit};
 
 /// The rule written out: `c (s + d ln(1 + e^((g / c - s) / d)))`.
 fn floor(g: f64, c: f64) -> f64 {

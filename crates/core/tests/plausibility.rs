@@ -1,35 +1,15 @@
 //! Plausibility, confidence and the plausible blend rule, against dense
 //! recomputations from the stored rows.
 
-use std::path::{Path, PathBuf};
+mod common;
 
 use brdf_atlas_core::loo::{CLAMP_BUDGET, CONVEX_LENGTH_RATIO, STEPS};
 use brdf_atlas_core::{BlendRule, FitOptions, GplvmParams, Model, NoProgress, Precision};
 use brdf_atlas_core::{TransformKind, fit_dir};
 use brdf_merl::directional::largest;
-use brdf_merl::{Dims, DirectionalRule, synth};
+use brdf_merl::{DirectionalRule, synth};
+use common::{DIMS, POINTS, fit};
 use faer::linalg::solvers::DenseSolveCore;
-
-const DIMS: Dims = Dims {
-    theta_h: 12,
-    theta_d: 12,
-    phi_d: 24,
-};
-
-fn fit(dir: &Path, count: usize, transform: TransformKind) -> PathBuf {
-    let data = dir.join(format!("data-{count}"));
-    if !data.exists() {
-        synth::write_dir(&data, count, DIMS, 5).unwrap();
-    }
-    let model = dir.join(format!("{}-{count}.atlas", transform.name()));
-    let options = FitOptions {
-        params: GplvmParams::new(2).check().unwrap(),
-        transform,
-        precision: Precision::F64,
-    };
-    fit_dir(&data, &model, &options, &NoProgress).unwrap();
-    model
-}
 
 /// `(removed, total, negative values, measured values)` of weights `w`,
 /// recomputed row by row in plain f64 from the stored rows.
@@ -68,15 +48,6 @@ fn dense_clamp_by<'a>(m: &Model, w: impl Fn(usize) -> &'a [f64], only: Option<us
     }
     acc
 }
-
-/// Points where the GP blend of the small synthetic models overshoots.
-const POINTS: [[f64; 2]; 5] = [
-    [0.31, -0.42],
-    [-0.9, 0.8],
-    [1.05, 1.05],
-    [-1.1, -0.2],
-    [0.0, 0.0],
-];
 
 #[test]
 fn clamp_figures_equal_a_dense_recomputation() {
