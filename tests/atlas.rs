@@ -4,7 +4,7 @@
 
 mod common;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use brdf_atlas_core::AlbedoMethod;
 use brdf_atlas_core::render::read_sidecar;
@@ -396,14 +396,19 @@ fn eval_prints_what_the_library_computes() {
         text.push_str(&format!("{ti} {pi} {to} {po}\n"));
     }
     std::fs::write(&batch, text).unwrap();
-    let out = brdf_atlas([
-        Path::new("eval"),
-        &fx.model(),
-        Path::new("--at"),
-        Path::new("0.25,-0.4"),
-        Path::new("--batch"),
-        &batch,
-    ]);
+    let eval_batch = |extra: &[&str]| {
+        let mut args = vec![
+            "eval".into(),
+            fx.model(),
+            "--at".into(),
+            "0.25,-0.4".into(),
+            "--batch".into(),
+            batch.clone(),
+        ];
+        args.extend(extra.iter().map(PathBuf::from));
+        brdf_atlas(args)
+    };
+    let out = eval_batch(&[]);
     let (stdout, stderr) = texts(&out);
     assert!(out.status.success(), "{stderr}");
     check(&stdout, &expected);
@@ -411,30 +416,14 @@ fn eval_prints_what_the_library_computes() {
     // The GP's own blend on request: here it differs from the floor's.
     let gp = expect(BlendRule::Gp);
     assert_ne!(gp, expected);
-    let out = brdf_atlas([
-        Path::new("eval"),
-        &fx.model(),
-        Path::new("--at"),
-        Path::new("0.25,-0.4"),
-        Path::new("--batch"),
-        &batch,
-        Path::new("--blend"),
-        Path::new("gp"),
-    ]);
+    let out = eval_batch(&["--blend", "gp"]);
     let (stdout, stderr) = texts(&out);
     assert!(out.status.success(), "{stderr}");
     check(&stdout, &gp);
 
     // A bad line is named with its number.
     std::fs::write(&batch, "30 0 30 180\n30 0 thirty 180\n").unwrap();
-    let out = brdf_atlas([
-        Path::new("eval"),
-        &fx.model(),
-        Path::new("--at"),
-        Path::new("0.25,-0.4"),
-        Path::new("--batch"),
-        &batch,
-    ]);
+    let out = eval_batch(&[]);
     assert_one_error_line(&out, &["pairs.txt:2:", "theta_i phi_i theta_o phi_o"]);
 }
 
