@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
 """Write a unit UV sphere as an OBJ file (v, vn, f v//n), for BRDF Explorer
-checkouts that lack src/data/sphere.obj (its "Lit Object" view loads it):
+checkouts that lack src/data/sphere.obj (its "Lit Object" view loads it).
+apply.sh runs it for the build copy it patches, never for the checkout; by
+hand, write into that copy the same way:
 
-    python3 cpp-plugin/make-sphere-obj.py BRDF_SRC_DIR/src/data/sphere.obj
+    python3 cpp-plugin/make-sphere-obj.py BUILD_DIR/src/data/sphere.obj
 """
 import math
 import sys
