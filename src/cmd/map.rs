@@ -170,6 +170,11 @@ pub fn draw(model: &Model, args: &Args, report: &mut impl Write) -> Result<(), E
             model.file().transform.name(),
             100.0 * estimate
         ),
+        AlbedoMethod::Lattice { nodes, tolerance } => format!(
+            "prepared map {}: exact albedos at {nodes} lattice nodes, a cubic between them (tolerance {:.2}%)",
+            brdf_atlas_core::lattice_path(model.path()).display(),
+            100.0 * tolerance
+        ),
         AlbedoMethod::Quadrature { samples, bins } => format!(
             "albedo integrated per pixel from {samples} quadrature samples ({bins} bins, {} transform)",
             model.file().transform.name()
@@ -242,6 +247,9 @@ pub fn run(args: &Args) -> Result<ExitCode, Error> {
     // Before the model is read: a misnamed output is quick to tell.
     check_extensions(args)?;
     let model = Model::open(&args.model)?;
+    if let Err(e) = model.prepared_map() {
+        eprintln!("note: {e}; the map is drawn without it");
+    }
     draw(&model, args, &mut io::stdout().lock())?;
     Ok(ExitCode::SUCCESS)
 }

@@ -58,6 +58,9 @@ fn describe(method: &AlbedoMethod) -> String {
             estimate,
         } => format!("field: {nodes} nodes, {patches} patches, estimate {estimate:.1e}"),
         AlbedoMethod::Quadrature { samples, bins } => format!("quadrature {samples} ({bins} bins)"),
+        AlbedoMethod::Lattice { nodes, tolerance } => {
+            format!("prepared lattice: {nodes} nodes, tolerance {tolerance:.1e}")
+        }
         AlbedoMethod::Linear => "linear".into(),
     }
 }

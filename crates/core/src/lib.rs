@@ -53,9 +53,9 @@ pub use model::{
 };
 pub use progress::{NoProgress, Progress};
 pub use query::{
-    AlbedoMap, AlbedoMethod, Blend, BlendRule, Confidence, DEFAULT_SAMPLES,
-    LOW_CONFIDENCE_VARIANCE, Located, Plausibility, Segment, View, contour_levels, contours,
-    luminance,
+    AlbedoLattice, AlbedoMap, AlbedoMethod, Blend, BlendRule, Confidence, DEFAULT_SAMPLES,
+    LATTICE_TOLERANCE, LOW_CONFIDENCE_VARIANCE, Located, Plausibility, Segment, View,
+    contour_levels, contours, lattice_path, luminance,
 };
 pub use query::{field, floor, render, sheet, swatch};
 pub use simd::fastlog;

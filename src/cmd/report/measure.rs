@@ -11,11 +11,10 @@ use std::time::{Duration, Instant};
 use brdf_atlas_core::loo::{self, Evaluation};
 use brdf_atlas_core::measure::{map_error, reference_albedo};
 use brdf_atlas_core::{AlbedoMethod, BlendRule, DEFAULT_SAMPLES, View};
-use brdf_atlas_core::{Dataset, build_store};
 use brdf_atlas_core::{
-    Fit, GplvmParams, GramData, Model, NoProgress, OptimizerKind, Precision, Store, TransformKind,
+    Dataset, Fit, GplvmParams, GramData, Model, ModelFile, NoProgress, OptimizerKind, Precision,
+    Store, StoreRef, TransformKind, build_store,
 };
-use brdf_atlas_core::{ModelFile, StoreRef};
 use brdf_merl::Quadrature;
 use faer::Mat;
 
@@ -603,7 +602,7 @@ fn map_samples(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error>
         })?;
         let bins = match map.method {
             AlbedoMethod::Quadrature { bins, .. } => bins,
-            AlbedoMethod::Linear | AlbedoMethod::Field { .. } => 0,
+            _ => 0,
         };
         r.samples.push(SampleRow {
             samples: s,
@@ -651,6 +650,7 @@ fn map_methods(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error>
             let (max_err, mean_err) = map_error(&map, &pixels, &reference);
             let (method, field) = match map.method {
                 AlbedoMethod::Field { nodes, .. } => (format!("field, {nodes} exact nodes"), true),
+                AlbedoMethod::Lattice { nodes, .. } => (format!("lattice, {nodes} nodes"), true),
                 AlbedoMethod::Quadrature { samples, .. } => {
                     (format!("per pixel, {samples} samples"), false)
                 }

@@ -298,6 +298,9 @@ pub(crate) struct MapBasis {
     /// The map's last per-pixel rules (`crate::query::map`'s `PixelRule`),
     /// one a sample count.
     pub(crate) pixel_rules: Recent,
+    /// The prepared map saved beside the model, read on first use
+    /// (`crate::query::lattice`'s load result).
+    pub(crate) lattice: OnceLock<Box<dyn Any + Send + Sync>>,
 }
 
 #[cfg(test)]

@@ -58,6 +58,14 @@ pub enum AlbedoMethod {
         /// The refinement's error estimate, relative to a node's largest channel.
         estimate: f64,
     },
+    /// The cubic of the prepared map's adaptive lattice of exact albedos
+    /// ([`crate::query::lattice`]), saved beside the model.
+    Lattice {
+        /// Exact albedos the lattice holds.
+        nodes: usize,
+        /// The refinement's tolerance, relative to a node's largest channel.
+        tolerance: f64,
+    },
     /// Per-pixel quadrature over reconstructed bins.
     Quadrature {
         /// Requested sample count.
@@ -224,6 +232,29 @@ impl Model {
         let kernel_row = |py: usize| kernel_row(&ex, &ey, n, py);
         progress.start("map", height as u64);
         let linear = self.file().transform.is_linear() && !floor;
+        // A prepared map of this material that holds the view draws it; a
+        // damaged or stale one is left aside (`Model::prepared_map` says why).
+        let lattice = match samples {
+            None if !linear => self
+                .prepared_map()
+                .ok()
+                .flatten()
+                .filter(|l| l.serves(view, rule)),
+            _ => None,
+        };
+        if let Some(lattice) = lattice {
+            let (rgb, variance) = lattice.draw(self, (width, height), view, progress)?;
+            return self.finish_map(
+                (width, height, view, rule),
+                rgb,
+                variance,
+                AlbedoMethod::Lattice {
+                    nodes: lattice.nodes(),
+                    tolerance: lattice.tolerance(),
+                },
+                progress,
+            );
+        }
         let field = match samples {
             None if !linear => {
                 let budget = self.field_budget(width * height, DEFAULT_SAMPLES);
@@ -353,8 +384,20 @@ impl Model {
                 }
             }
         };
+        self.finish_map((width, height, view, rule), rgb, variance, method, progress)
+    }
+
+    /// The map of a finished pass: none if it was cancelled (rows skipped
+    /// then hold zeros), an error if the store changed meanwhile.
+    fn finish_map(
+        &self,
+        (width, height, view, rule): (usize, usize, View, BlendRule),
+        rgb: Vec<[f32; 3]>,
+        variance: Vec<f32>,
+        method: AlbedoMethod,
+        progress: &dyn Progress,
+    ) -> Result<AlbedoMap> {
         progress.finish();
-        // Rows skipped once cancelled hold zeros: no map at all, then.
         if progress.cancelled() {
             return Err(CoreError::Cancelled);
         }

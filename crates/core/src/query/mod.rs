@@ -9,6 +9,7 @@ mod exact;
 pub mod field;
 pub mod floor;
 mod labels;
+pub mod lattice;
 pub mod locate;
 pub mod map;
 mod overlay;
@@ -24,6 +25,7 @@ mod sweep;
 mod view;
 
 pub use contour::{Segment, contour_levels, contours, luminance};
+pub use lattice::{AlbedoLattice, LATTICE_TOLERANCE, lattice_path};
 pub use locate::Located;
 pub use map::{AlbedoMap, AlbedoMethod, DEFAULT_SAMPLES, View};
 pub use plausibility::{BlendRule, Confidence, LOW_CONFIDENCE_VARIANCE, Plausibility};
