@@ -4,7 +4,8 @@
 //! Data: the directory named by `BRDF_ATLAS_NBRDF_DIR` (MERL files, e.g.
 //! the 100 NBRDF-derived materials from `../shared/tools/nbrdf-to-merl`),
 //! or else 16 synthetic materials at 90 x 90 x 180. The models are fitted
-//! once before timing starts. Run with `cargo bench --bench atlas`.
+//! once before timing starts (and the log model's map prepared, unless
+//! `BRDF_ATLAS_PREPARED_MODEL` names a model prepared before). Run with `cargo bench --bench atlas`.
 
 mod common;
 
@@ -145,6 +146,39 @@ fn atlas(c: &mut Criterion) {
         g.bench_function(BenchmarkId::new("log_quadrature_256", samples), |b| {
             b.iter(|| {
                 log.albedo_map(256, 256, View::default(), Some(samples), &NoProgress)
+                    .expect("map")
+            })
+        });
+    }
+    // The prepared map: a 1024 x 1024 map of the default view and of a
+    // view a hundred times smaller, each pixel the cubic of the lattice.
+    // The lattice is `BRDF_ATLAS_PREPARED_MODEL`'s (a model with its
+    // MODEL.lattice beside it, from `brdf-atlas prepare`: minutes for 100
+    // materials), or else prepared here for the log model above.
+    let prepared = match std::env::var_os("BRDF_ATLAS_PREPARED_MODEL") {
+        Some(path) => Model::open(path).expect("open the prepared model"),
+        None => {
+            log.prepare_map(
+                BlendRule::Floor,
+                brdf_atlas_core::LATTICE_TOLERANCE,
+                &NoProgress,
+            )
+            .expect("prepare")
+            .save(&brdf_atlas_core::lattice_path(log.path()))
+            .expect("save the lattice");
+            Model::open(log.path()).expect("open model")
+        }
+    };
+    assert!(
+        prepared.prepared_map().expect("the lattice").is_some(),
+        "no lattice beside {}",
+        prepared.path().display()
+    );
+    for (name, view) in [("default", View::default()), ("1/100", small)] {
+        g.bench_function(BenchmarkId::new("log_prepared_1024", name), |b| {
+            b.iter(|| {
+                prepared
+                    .albedo_map(1024, 1024, view, None, &NoProgress)
                     .expect("map")
             })
         });

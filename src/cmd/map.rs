@@ -36,7 +36,9 @@ pub const DEFAULT_CONTOURS: u32 = 12;
 /// them (within 0.25% by its error estimate), where that costs less than
 /// integrating every pixel from 256 quadrature samples, which is done
 /// otherwise (zoomed-in views get a field; --samples S always integrates per
-/// pixel).
+/// pixel). Once `brdf-atlas prepare MODEL` has saved the prepared map
+/// (MODEL.lattice), every map inside the default view is drawn from it: a
+/// fraction of a second, within its tolerance of the exact albedos.
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
     /// Model file written by `fit` (q = 2).
@@ -79,7 +81,7 @@ pub struct Args {
 /// `--samples`' help, with the core's default.
 fn samples_help() -> String {
     format!(
-        "Integrate every pixel from S quadrature samples (any model); without it, raw is exact and log uses the albedo field where it is cheaper than {DEFAULT_SAMPLES} samples a pixel"
+        "Integrate every pixel from S quadrature samples (any model); without it, raw is exact and log uses the prepared map (brdf-atlas prepare) inside the default view, else the albedo field where it is cheaper than {DEFAULT_SAMPLES} samples a pixel"
     )
 }
 
