@@ -264,6 +264,25 @@ fn map_interrupted_changes_nothing() {
 }
 
 #[test]
+fn prepare_interrupted_leaves_no_lattice() {
+    let m = materials();
+    let out = tempfile::tempdir().unwrap();
+    let model = out.path().join("a.atlas");
+    run(&fit_args(m, &model));
+    let before = listing(out.path());
+    let args = ["prepare", model.to_str().unwrap()];
+    run(&args);
+    let complete = listing(out.path());
+    std::fs::remove_file(out.path().join("a.lattice")).unwrap();
+    for delay in [50, 300].map(Duration::from_millis) {
+        let (code, stderr) = interrupt(spawn(&args), delay, libc::SIGINT);
+        let what = format!("prepare after {delay:?}");
+        check_interrupted(&what, code, &stderr, 130, out.path(), &before, &complete);
+        let _ = std::fs::remove_file(out.path().join("a.lattice"));
+    }
+}
+
+#[test]
 fn report_interrupted_keeps_the_old_report_whole() {
     let tmp = tempfile::tempdir().unwrap();
     let m = tmp.path().join("m");

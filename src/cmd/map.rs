@@ -172,10 +172,22 @@ pub fn draw(model: &Model, args: &Args, report: &mut impl Write) -> Result<(), E
             model.file().transform.name(),
             100.0 * estimate
         ),
-        AlbedoMethod::Lattice { nodes, tolerance } => format!(
-            "prepared map {}: exact albedos at {nodes} lattice nodes, a cubic between them (tolerance {:.2}%)",
+        AlbedoMethod::Lattice {
+            nodes,
+            tolerance,
+            share,
+        } => format!(
+            "prepared map {}: exact albedos at {nodes} lattice nodes, a cubic between them (tolerance {:.2}%){}",
             brdf_atlas_core::lattice_path(model.path()).display(),
-            100.0 * tolerance
+            100.0 * tolerance,
+            if share < 1.0 {
+                format!(
+                    ", for the {:.1}% of the pixels inside the default view",
+                    100.0 * share
+                )
+            } else {
+                String::new()
+            }
         ),
         AlbedoMethod::Quadrature { samples, bins } => format!(
             "albedo integrated per pixel from {samples} quadrature samples ({bins} bins, {} transform)",

@@ -58,9 +58,11 @@ fn describe(method: &AlbedoMethod) -> String {
             estimate,
         } => format!("field: {nodes} nodes, {patches} patches, estimate {estimate:.1e}"),
         AlbedoMethod::Quadrature { samples, bins } => format!("quadrature {samples} ({bins} bins)"),
-        AlbedoMethod::Lattice { nodes, tolerance } => {
-            format!("prepared lattice: {nodes} nodes, tolerance {tolerance:.1e}")
-        }
+        AlbedoMethod::Lattice {
+            nodes,
+            tolerance,
+            share,
+        } => format!("prepared lattice: {nodes} nodes, tol {tolerance:.1e}, {share:.2} of it"),
         AlbedoMethod::Linear => "linear".into(),
     }
 }

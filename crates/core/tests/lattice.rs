@@ -146,18 +146,59 @@ fn a_saved_lattice_draws_every_map_inside_the_default_view() {
         "{:?}",
         gp.method
     );
-    let wide = View {
-        x0: -1.5,
-        x1: 1.5,
-        y0: -1.5,
-        y1: 1.5,
+    let far = View {
+        x0: 1.2,
+        x1: 1.6,
+        y0: -0.2,
+        y1: 0.2,
     };
-    let beyond = model.albedo_map(16, 16, wide, None, &NoProgress).unwrap();
+    let beyond = model.albedo_map(16, 16, far, None, &NoProgress).unwrap();
     assert!(
         !matches!(beyond.method, AlbedoMethod::Lattice { .. }),
         "{:?}",
         beyond.method
     );
+    // A view reaching beyond the window (a panel wider than tall): the
+    // pixels inside it from the lattice, the strips outside drawn without
+    // it, and the variance the exact one's everywhere.
+    let wide = View {
+        x0: -1.5,
+        x1: 1.5,
+        y0: -1.2,
+        y1: 1.0,
+    };
+    let (w, h) = (30, 22);
+    let mixed = model.albedo_map(w, h, wide, None, &NoProgress).unwrap();
+    let AlbedoMethod::Lattice { share, .. } = mixed.method else {
+        panic!("{:?}", mixed.method)
+    };
+    let window = lattice.view();
+    let exact_variance = model.variance_map(w, h, wide).unwrap();
+    let mut inside = 0;
+    for (k, rgb) in mixed.rgb.iter().enumerate() {
+        let x = wide.pixel_to_latent((k % w) as f64, (k / w) as f64, w, h);
+        let within =
+            (window.x0..=window.x1).contains(&x[0]) && (window.y0..=window.y1).contains(&x[1]);
+        if within {
+            inside += 1;
+            assert_eq!(
+                *rgb,
+                lattice.albedo_at(x).map(|a| a.max(0.0) as f32),
+                "pixel {k}"
+            );
+        } else {
+            let worst = worst_error(&model, BlendRule::Floor, &[x], |_| rgb.map(f64::from));
+            assert!(worst < 0.1, "pixel {k} outside: {:.2}% off", 100.0 * worst);
+        }
+        let v = mixed.variance[k];
+        assert!(
+            (v - exact_variance[k]).abs() < 3e-3,
+            "pixel {k}: variance {v} against {}",
+            exact_variance[k]
+        );
+    }
+    assert!(inside > 0 && inside < w * h, "{inside} pixels inside");
+    assert_eq!(share, inside as f64 / (w * h) as f64);
     let sampled = model
         .albedo_map(16, 16, View::default(), Some(64), &NoProgress)
         .unwrap();

@@ -27,6 +27,7 @@
 //! lattice of another fit, or of another rule, is not used.
 
 use std::collections::HashMap;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, OnceLock};
 
@@ -123,15 +124,15 @@ impl AlbedoLattice {
         self.unchecked as f64 / self.serve.len() as f64
     }
 
-    /// Whether it draws `view` of `rule`'s material: the rule is its own and
-    /// the view lies inside its window.
+    /// Whether it draws some of `view` of `rule`'s material: the rule is
+    /// its own and the view overlaps its window.
     pub fn serves(&self, view: View, rule: BlendRule) -> bool {
         let v = self.view;
         rule == self.rule
-            && view.x0 >= v.x0
-            && view.x1 <= v.x1
-            && view.y0 >= v.y0
-            && view.y1 <= v.y1
+            && view.x0 <= v.x1
+            && view.x1 >= v.x0
+            && view.y0 <= v.y1
+            && view.y1 >= v.y0
     }
 
     /// Finest-lattice coordinates of a latent point (row from the bottom,
@@ -206,34 +207,53 @@ impl AlbedoLattice {
         Ok(out[0].clamp(0.0, 1.0))
     }
 
-    /// The albedo and variance of each pixel of a `width x height` image of
-    /// `view` (inside the lattice's view), row 0 at the top.
-    pub(crate) fn draw(
+    /// The block of a `width x height` image of `view` whose pixel centres
+    /// lie inside the lattice's window: columns and rows (row 0 at the
+    /// top); `None` if no pixel does.
+    fn inside(
+        &self,
+        width: usize,
+        height: usize,
+        view: View,
+    ) -> Option<(Range<usize>, Range<usize>)> {
+        let w = self.view;
+        let x = |px: usize| view.pixel_to_latent(px as f64, 0.0, width, height)[0];
+        let y = |py: usize| view.pixel_to_latent(0.0, py as f64, width, height)[1];
+        let cols = (0..width).filter(|&px| (w.x0..=w.x1).contains(&x(px)));
+        let rows = (0..height).filter(|&py| (w.y0..=w.y1).contains(&y(py)));
+        let (c0, c1) = (cols.clone().next()?, cols.last()? + 1);
+        let (r0, r1) = (rows.clone().next()?, rows.last()? + 1);
+        Some((c0..c1, r0..r1))
+    }
+
+    /// The albedo and variance of the pixels of `block` (columns, rows) of
+    /// a `width x height` image of `view`, into `rgb` and `variance` (the
+    /// whole image's, row 0 at the top).
+    fn draw_block(
         &self,
         model: &Model,
-        (width, height): (usize, usize),
-        view: View,
+        (width, height, view): (usize, usize, View),
+        (cols, rows): (Range<usize>, Range<usize>),
+        (rgb, variance): (&mut [[f32; 3]], &mut [f32]),
         progress: &dyn Progress,
-    ) -> Result<(Vec<[f32; 3]>, Vec<f32>)> {
-        self.variance_at(model, [view.x0, view.y0])?;
-        let mut rgb = vec![[0.0f32; 3]; width * height];
-        let mut variance = vec![0.0f32; width * height];
+    ) -> Result<()> {
+        self.variance_at(model, [self.view.x0, self.view.y0])?;
         rgb.par_chunks_mut(width)
             .zip(variance.par_chunks_mut(width))
             .enumerate()
+            .filter(|(py, _)| rows.contains(py))
             .try_for_each(|(py, (row, var))| {
                 if progress.cancelled() {
                     return Ok(());
                 }
-                for (px, (o, v)) in row.iter_mut().zip(var.iter_mut()).enumerate() {
+                for px in cols.clone() {
                     let x = view.pixel_to_latent(px as f64, py as f64, width, height);
-                    *o = self.albedo_at(x).map(|a| a.max(0.0) as f32);
-                    *v = self.variance_at(model, x)? as f32;
+                    row[px] = self.albedo_at(x).map(|a| a.max(0.0) as f32);
+                    var[px] = self.variance_at(model, x)? as f32;
                 }
                 progress.advance(1);
                 Ok::<(), CoreError>(())
-            })?;
-        Ok((rgb, variance))
+            })
     }
 
     /// Save as JSON at `path`, atomically.
@@ -563,6 +583,68 @@ impl Model {
             unchecked: open.len(),
             variance: OnceLock::new(),
         })
+    }
+
+    /// A `width x height` map of `view` drawn with the prepared map
+    /// `lattice`: the pixels whose centres lie in its window from its
+    /// cubic, the strips outside it (if any) as maps of their own without
+    /// it. The albedo, the variance and the share of pixels from the
+    /// lattice; `None` if no pixel lies in its window.
+    pub(crate) fn draw_prepared(
+        &self,
+        lattice: &AlbedoLattice,
+        (width, height, view): (usize, usize, View),
+        rule: BlendRule,
+        progress: &dyn Progress,
+    ) -> Result<Option<(Vec<[f32; 3]>, Vec<f32>, f64)>> {
+        let Some((cols, rows)) = lattice.inside(width, height, view) else {
+            return Ok(None);
+        };
+        let mut rgb = vec![[0.0f32; 3]; width * height];
+        let mut variance = vec![0.0f32; width * height];
+        progress.start("map", rows.len() as u64);
+        lattice.draw_block(
+            self,
+            (width, height, view),
+            (cols.clone(), rows.clone()),
+            (&mut rgb, &mut variance),
+            progress,
+        )?;
+        progress.finish();
+        // The strips outside the window: left and right of full height,
+        // above and below between them.
+        let strips = [
+            (0..cols.start, 0..height),
+            (cols.end..width, 0..height),
+            (cols.clone(), 0..rows.start),
+            (cols.clone(), rows.end..height),
+        ];
+        for (sc, sr) in strips {
+            if sc.is_empty() || sr.is_empty() {
+                continue;
+            }
+            let (dx, dy) = (
+                (view.x1 - view.x0) / width as f64,
+                (view.y1 - view.y0) / height as f64,
+            );
+            let strip = View {
+                x0: view.x0 + dx * sc.start as f64,
+                x1: view.x0 + dx * sc.end as f64,
+                y0: view.y1 - dy * sr.end as f64,
+                y1: view.y1 - dy * sr.start as f64,
+            };
+            let map = self.albedo_map_with(sc.len(), sr.len(), strip, None, rule, progress)?;
+            for (k, py) in sr.clone().enumerate() {
+                let (from, to) = (
+                    k * sc.len()..(k + 1) * sc.len(),
+                    py * width + sc.start..py * width + sc.end,
+                );
+                rgb[to.clone()].copy_from_slice(&map.rgb[from.clone()]);
+                variance[to].copy_from_slice(&map.variance[from]);
+            }
+        }
+        let share = (cols.len() * rows.len()) as f64 / (width * height) as f64;
+        Ok(Some((rgb, variance, share)))
     }
 
     /// The prepared map saved beside the model ([`lattice_path`]), read on

@@ -65,6 +65,9 @@ pub enum AlbedoMethod {
         nodes: usize,
         /// The refinement's tolerance, relative to a node's largest channel.
         tolerance: f64,
+        /// The share of the pixels drawn from the lattice (those in its
+        /// window, the default view); the rest were drawn as without it.
+        share: f64,
     },
     /// Per-pixel quadrature over reconstructed bins.
     Quadrature {
@@ -232,7 +235,7 @@ impl Model {
         let kernel_row = |py: usize| kernel_row(&ex, &ey, n, py);
         progress.start("map", height as u64);
         let linear = self.file().transform.is_linear() && !floor;
-        // A prepared map of this material that holds the view draws it; a
+        // A prepared map of this material draws the pixels in its window; a
         // damaged or stale one is left aside (`Model::prepared_map` says why).
         let lattice = match samples {
             None if !linear => self
@@ -242,18 +245,17 @@ impl Model {
                 .filter(|l| l.serves(view, rule)),
             _ => None,
         };
-        if let Some(lattice) = lattice {
-            let (rgb, variance) = lattice.draw(self, (width, height), view, progress)?;
-            return self.finish_map(
-                (width, height, view, rule),
-                rgb,
-                variance,
-                AlbedoMethod::Lattice {
-                    nodes: lattice.nodes(),
-                    tolerance: lattice.tolerance(),
-                },
-                progress,
-            );
+        let drawn = match &lattice {
+            Some(l) => self.draw_prepared(l, (width, height, view), rule, progress)?,
+            None => None,
+        };
+        if let (Some(l), Some((rgb, variance, share))) = (lattice, drawn) {
+            let method = AlbedoMethod::Lattice {
+                nodes: l.nodes(),
+                tolerance: l.tolerance(),
+                share,
+            };
+            return self.finish_map((width, height, view, rule), rgb, variance, method, progress);
         }
         let field = match samples {
             None if !linear => {
