@@ -219,10 +219,10 @@ impl AlbedoLattice {
         let w = self.view;
         let x = |px: usize| view.pixel_to_latent(px as f64, 0.0, width, height)[0];
         let y = |py: usize| view.pixel_to_latent(0.0, py as f64, width, height)[1];
-        let cols = (0..width).filter(|&px| (w.x0..=w.x1).contains(&x(px)));
-        let rows = (0..height).filter(|&py| (w.y0..=w.y1).contains(&y(py)));
-        let (c0, c1) = (cols.clone().next()?, cols.last()? + 1);
-        let (r0, r1) = (rows.clone().next()?, rows.last()? + 1);
+        let mut cols = (0..width).filter(|&px| (w.x0..=w.x1).contains(&x(px)));
+        let mut rows = (0..height).filter(|&py| (w.y0..=w.y1).contains(&y(py)));
+        let (c0, c1) = (cols.clone().next()?, cols.next_back()? + 1);
+        let (r0, r1) = (rows.clone().next()?, rows.next_back()? + 1);
         Some((c0..c1, r0..r1))
     }
 
