@@ -59,6 +59,10 @@ const VERSION: u32 = 1;
 /// it cannot be used.
 type Loaded = std::result::Result<Option<Arc<AlbedoLattice>>, String>;
 
+/// A map drawn with the lattice: albedo, variance, and the share of the
+/// pixels from the lattice.
+type Drawn = (Vec<[f32; 3]>, Vec<f32>, f64);
+
 /// Node indices on the finest lattice: (row from the bottom, column).
 type Key = (usize, usize);
 
@@ -596,7 +600,7 @@ impl Model {
         (width, height, view): (usize, usize, View),
         rule: BlendRule,
         progress: &dyn Progress,
-    ) -> Result<Option<(Vec<[f32; 3]>, Vec<f32>, f64)>> {
+    ) -> Result<Option<Drawn>> {
         let Some((cols, rows)) = lattice.inside(width, height, view) else {
             return Ok(None);
         };
