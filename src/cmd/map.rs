@@ -37,8 +37,9 @@ pub const DEFAULT_CONTOURS: u32 = 12;
 /// integrating every pixel from 256 quadrature samples, which is done
 /// otherwise (zoomed-in views get a field; --samples S always integrates per
 /// pixel). Once `brdf-atlas prepare MODEL` has saved the prepared map
-/// (MODEL.lattice), every map inside the default view is drawn from it: a
-/// fraction of a second, within its tolerance of the exact albedos.
+/// (MODEL.lattice), every map's pixels inside the default view are drawn
+/// from it: a fraction of a second, within its tolerance of the exact
+/// albedos.
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
     /// Model file written by `fit` (q = 2).
