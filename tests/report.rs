@@ -36,6 +36,7 @@ fn report_writes_every_file_and_fails_atomically() {
         "-o".as_ref(),
         rep.as_os_str(),
         "--quick".as_ref(),
+        "--prepare".as_ref(),
     ]);
     let (stdout, stderr) = texts(&run);
     assert!(run.status.success(), "{stdout}\n{stderr}");
@@ -83,6 +84,17 @@ fn report_writes_every_file_and_fails_atomically() {
             "{t}: {loo}"
         );
     }
+    // The prepared map beside the field and the per-pixel rule, and the
+    // answer to "in real time?" from its figures.
+    assert_eq!(
+        md.matches("| prepared lattice, ").count(),
+        2,
+        "report.md lacks the prepared map's rows:\n{md}"
+    );
+    assert!(
+        md.contains("**Can the map be drawn in real time?** Yes, once the model's map is prepared"),
+        "report.md lacks the answer from the prepared map:\n{md}"
+    );
     assert!(
         md.contains("projected to the nearest convex ones"),
         "report.md lacks the projected weights' line"

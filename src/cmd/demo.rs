@@ -240,6 +240,7 @@ fn write_report(state: &mut State) -> Result<(), Error> {
         out: state.args.dir.join(REPORT),
         q_max: None,
         quick: true,
+        prepare: false,
         optimizer: OptimizerArg::Lbfgs,
         growth: Vec::new(),
     };

@@ -8,14 +8,12 @@ use std::io::Write;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
+use brdf_atlas_core::BlendRule;
 use brdf_atlas_core::loo::{self, Evaluation};
-use brdf_atlas_core::measure::{map_error, reference_albedo};
-use brdf_atlas_core::{AlbedoMethod, BlendRule, DEFAULT_SAMPLES, View};
 use brdf_atlas_core::{
     Dataset, Fit, GplvmParams, GramData, Model, ModelFile, NoProgress, OptimizerKind, Precision,
     Store, StoreRef, TransformKind, build_store,
 };
-use brdf_merl::Quadrature;
 use faer::Mat;
 
 use super::plan::Plan;
@@ -89,9 +87,12 @@ pub struct MethodRow {
     pub method: String,
     /// The method is the albedo field.
     pub field: bool,
+    /// The method is the prepared map's lattice.
+    pub prepared: bool,
     pub max_err: f64,
     pub mean_err: f64,
-    /// The first map of the view (a field builds its nodes), and the next.
+    /// The first map of the view (a field builds its nodes; the prepared
+    /// map's row includes preparing the lattice), and the next.
     pub first: Duration,
     pub again: Duration,
 }
@@ -228,11 +229,13 @@ pub fn measure(
 
     if let Some((log_model, raw_model)) = &models {
         steps.say("albedo map: sample count vs error vs time")?;
-        map_samples(log_model, plan, r)?;
-        steps.say("albedo map: the albedo field against the per-pixel rule")?;
-        map_methods(log_model, plan, r)?;
+        super::maps::samples(log_model, plan, r)?;
+        steps.say(
+            "albedo map: the albedo field and the prepared lattice against the per-pixel rule",
+        )?;
+        super::maps::methods(log_model, plan, r)?;
         steps.say("albedo map: size vs time")?;
-        map_sizes(log_model, raw_model, plan, r)?;
+        super::maps::sizes(log_model, raw_model, plan, r)?;
         steps.say(&format!(
             "plausibility at {0} x {0} points of the map, each model, every blend rule",
             plan.plausibility_grid
@@ -564,136 +567,6 @@ fn compare_precision(m32: &Model, m64: &Model, plan: &Plan, r: &mut Results) -> 
             rms: (sum2 / count.max(1) as f64).sqrt(),
             time32,
             time64,
-        });
-    }
-    Ok(())
-}
-
-/// The log map's error (against dense references on a small grid) and
-/// time for each sample count.
-fn map_samples(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error> {
-    let view = View::default();
-    let w = 4 * plan.grid;
-    let pixels: Vec<(usize, usize)> = (0..plan.grid)
-        .flat_map(|a| (0..plan.grid).map(move |b| (2 + 4 * a, 2 + 4 * b)))
-        .collect();
-    let dense = Quadrature::dense(model.dims(), 1);
-    let t = Instant::now();
-    let reference = pixels
-        .iter()
-        .map(|&(px, py)| {
-            reference_albedo(
-                model,
-                &view.pixel_to_latent(px as f64, py as f64, w, w),
-                BlendRule::default(),
-                &dense,
-            )
-        })
-        .collect::<Result<Vec<_>, _>>()?;
-    r.reference_time = t.elapsed();
-    r.reference_pixels = pixels.len();
-    let bars = Bars::new("map sample counts");
-    for &s in &plan.samples {
-        let small = model.albedo_map(w, w, view, Some(s), &NoProgress)?;
-        let (max_err, mean_err) = map_error(&small, &pixels, &reference);
-        let size = plan.timed_size;
-        let (map, time) = timed(plan.repeat, || {
-            Ok(model.albedo_map(size, size, view, Some(s), &bars)?)
-        })?;
-        let bins = match map.method {
-            AlbedoMethod::Quadrature { bins, .. } => bins,
-            _ => 0,
-        };
-        r.samples.push(SampleRow {
-            samples: s,
-            bins,
-            max_err,
-            mean_err,
-            time,
-        });
-    }
-    Ok(())
-}
-
-/// The default map (the albedo field where it fits its budget) and the
-/// per-pixel rule with the default samples, at random pixels of the default
-/// view and of one a hundred times smaller: error against dense references
-/// and time, first and again (a field is kept by the model).
-fn map_methods(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error> {
-    let size = plan.timed_size;
-    let small = View::zoomed_hundredfold();
-    let mut seed = 0x5eed_u64;
-    let mut next = || {
-        seed = seed
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        ((seed >> 33) as usize) % size
-    };
-    for (name, view) in [("default", View::default()), ("1/100", small)] {
-        let pixels: Vec<(usize, usize)> = (0..plan.grid * plan.grid)
-            .map(|_| (next(), next()))
-            .collect();
-        let reference = pixels
-            .iter()
-            .map(|&(px, py)| {
-                let x = view.pixel_to_latent(px as f64, py as f64, size, size);
-                reference_albedo(model, &x, BlendRule::default(), model.albedo_rule())
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-        for samples in [None, Some(DEFAULT_SAMPLES)] {
-            let t = Instant::now();
-            let map = model.albedo_map(size, size, view, samples, &NoProgress)?;
-            let first = t.elapsed();
-            let t = Instant::now();
-            model.albedo_map(size, size, view, samples, &NoProgress)?;
-            let again = t.elapsed();
-            let (max_err, mean_err) = map_error(&map, &pixels, &reference);
-            let (method, field) = match map.method {
-                AlbedoMethod::Field { nodes, .. } => (format!("field, {nodes} exact nodes"), true),
-                AlbedoMethod::Lattice { nodes, .. } => (format!("lattice, {nodes} nodes"), true),
-                AlbedoMethod::Quadrature { samples, .. } => {
-                    (format!("per pixel, {samples} samples"), false)
-                }
-                AlbedoMethod::Linear => ("linear".into(), false),
-            };
-            let method = match samples {
-                None => format!("default ({method})"),
-                Some(_) => method,
-            };
-            r.methods.push(MethodRow {
-                view: name,
-                method,
-                field,
-                max_err,
-                mean_err,
-                first,
-                again,
-            });
-        }
-    }
-    r.methods_size = size;
-    Ok(())
-}
-
-/// The time of a map of each size, log (default samples) and raw (linear).
-fn map_sizes(log: &Model, raw: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error> {
-    let view = View::default();
-    for &s in &plan.sizes {
-        let (_, t) = timed(plan.repeat, || {
-            Ok(log.albedo_map(s, s, view, Some(DEFAULT_SAMPLES), &NoProgress)?)
-        })?;
-        r.sizes.push(SizeRow {
-            method: format!("log, {DEFAULT_SAMPLES} samples"),
-            size: s,
-            time: t,
-        });
-        let (_, t) = timed(plan.repeat, || {
-            Ok(raw.albedo_map(s, s, view, None, &NoProgress)?)
-        })?;
-        r.sizes.push(SizeRow {
-            method: "raw, linear".into(),
-            size: s,
-            time: t,
         });
     }
     Ok(())

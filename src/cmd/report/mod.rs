@@ -12,6 +12,7 @@
 
 mod csv;
 mod growth;
+mod maps;
 mod markdown;
 mod measure;
 mod plan;
@@ -42,8 +43,9 @@ use crate::progress::Bars;
 /// of the GPLVM (closed form, no refit) for q = 1..Q and both transforms,
 /// beside PCA with as many components; Hooke-Jeeves vs L-BFGS and
 /// Hooke-Jeeves' minimum step (cost reached vs time); the albedo map's
-/// error and time vs quadrature samples and its time vs size; f32 vs f64
-/// stores. Writes REPORT_DIR/report.md, CSV files and PNG plots. Needs
+/// error and time vs quadrature samples, the prepared map's against it (its
+/// lattice built once, minutes at full resolution; not under --quick unless
+/// --prepare) and its time vs size; f32 vs f64 stores. Writes REPORT_DIR/report.md, CSV files and PNG plots. Needs
 /// disk for the stores it builds (about 4 times the MERL files' size in
 /// f32) in a staging directory beside REPORT_DIR, removed at the end;
 /// REPORT_DIR appears (or replaces an earlier report) only when complete.
@@ -58,8 +60,14 @@ pub struct Args {
     #[arg(long, help = plan::q_max_help(), value_parser = clap::value_parser!(u32).range(1..=MAX_Q as i64))]
     pub q_max: Option<u32>,
     /// Fewer settings (sample counts, map sizes, steps): a report in seconds on small data.
+    /// It leaves the prepared map out unless --prepare is given.
     #[arg(long)]
     pub quick: bool,
+    /// Measure the prepared map (`brdf-atlas prepare`) under --quick too:
+    /// preparing its lattice takes minutes at full resolution (2.4 minutes
+    /// for the demo's 16 materials, 8 - 12 for 100).
+    #[arg(long)]
+    pub prepare: bool,
     /// Optimiser of the fits for q = 1..Q (the other one fits q = 2 as well;
     /// maps and the precision comparison use the fit of `fit`'s default, L-BFGS).
     #[arg(long, value_enum, default_value_t = OptimizerArg::Lbfgs)]

@@ -40,6 +40,8 @@ pub struct Plan {
     pub repeat: bool,
     /// Points per side of the plausibility grid.
     pub plausibility_grid: usize,
+    /// Measure the prepared map (its lattice takes minutes to build).
+    pub prepare: bool,
 }
 
 impl Plan {
@@ -67,6 +69,7 @@ impl Plan {
                 points: 2,
                 repeat: false,
                 plausibility_grid: 3,
+                prepare: args.prepare,
             }
         } else {
             Plan {
@@ -80,6 +83,7 @@ impl Plan {
                 points: 4,
                 repeat: true,
                 plausibility_grid: 10,
+                prepare: true,
             }
         }
     }

@@ -38,6 +38,7 @@ use crate::error::{CoreError, Result};
 use crate::model::Model;
 use crate::progress::Progress;
 use crate::query::exact::floor_of;
+use crate::query::map::{AlbedoMap, AlbedoMethod};
 use crate::query::plausibility::BlendRule;
 use crate::query::view::View;
 
@@ -587,6 +588,54 @@ impl Model {
             unchecked: open.len(),
             variance: OnceLock::new(),
         })
+    }
+
+    /// A `width x height` map of `view` of `lattice`'s material, drawn with
+    /// `lattice` whether or not it is saved beside the model: the pixels in
+    /// its window from its cubic, the rest as [`Model::albedo_map_with`]
+    /// draws them without it. A lattice of another fit is refused.
+    pub fn albedo_map_prepared(
+        &self,
+        lattice: &AlbedoLattice,
+        width: usize,
+        height: usize,
+        view: View,
+        progress: &dyn Progress,
+    ) -> Result<AlbedoMap> {
+        if lattice.fingerprint != self.fingerprint() {
+            return Err(CoreError::BadQuery(format!(
+                "the lattice was built from another fit than {}",
+                self.path().display()
+            )));
+        }
+        self.check_map_request(width, height, view)?;
+        match self.lattice_map(lattice, (width, height, view), progress)? {
+            Some(map) => Ok(map),
+            None => self.albedo_map_with(width, height, view, None, lattice.rule, progress),
+        }
+    }
+
+    /// [`Model::draw_prepared`] as a map; `None` if no pixel lies in the
+    /// lattice's window.
+    pub(crate) fn lattice_map(
+        &self,
+        lattice: &AlbedoLattice,
+        (width, height, view): (usize, usize, View),
+        progress: &dyn Progress,
+    ) -> Result<Option<AlbedoMap>> {
+        let rule = lattice.rule;
+        let Some((rgb, variance, share)) =
+            self.draw_prepared(lattice, (width, height, view), rule, progress)?
+        else {
+            return Ok(None);
+        };
+        let method = AlbedoMethod::Lattice {
+            nodes: lattice.nodes(),
+            tolerance: lattice.tolerance,
+            share,
+        };
+        self.finish_map((width, height, view, rule), rgb, variance, method, progress)
+            .map(Some)
     }
 
     /// A `width x height` map of `view` drawn with the prepared map

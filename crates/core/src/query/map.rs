@@ -245,17 +245,10 @@ impl Model {
                 .filter(|l| l.serves(view, rule)),
             _ => None,
         };
-        let drawn = match &lattice {
-            Some(l) => self.draw_prepared(l, (width, height, view), rule, progress)?,
-            None => None,
-        };
-        if let (Some(l), Some((rgb, variance, share))) = (lattice, drawn) {
-            let method = AlbedoMethod::Lattice {
-                nodes: l.nodes(),
-                tolerance: l.tolerance(),
-                share,
-            };
-            return self.finish_map((width, height, view, rule), rgb, variance, method, progress);
+        if let Some(l) = lattice
+            && let Some(map) = self.lattice_map(&l, (width, height, view), progress)?
+        {
+            return Ok(map);
         }
         let field = match samples {
             None if !linear => {
@@ -391,7 +384,7 @@ impl Model {
 
     /// The map of a finished pass: none if it was cancelled (rows skipped
     /// then hold zeros), an error if the store changed meanwhile.
-    fn finish_map(
+    pub(crate) fn finish_map(
         &self,
         (width, height, view, rule): (usize, usize, View, BlendRule),
         rgb: Vec<[f32; 3]>,
@@ -519,7 +512,7 @@ impl Model {
 
     /// A map needs a 2-D model, a size within [`crate::limits::MAX_MAP_SIDE`]
     /// a side and a finite, non-empty view.
-    fn check_map_request(&self, width: usize, height: usize, view: View) -> Result<()> {
+    pub(crate) fn check_map_request(&self, width: usize, height: usize, view: View) -> Result<()> {
         if self.q() != 2 {
             return Err(CoreError::BadQuery(format!(
                 "a map needs a 2-D latent space, this model has q = {}",

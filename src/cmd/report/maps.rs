@@ -1,0 +1,174 @@
+//! The report's map measurements: what the per-pixel rule's sample count
+//! buys, the default method (the albedo field where it fits its budget)
+//! and the prepared map (the lattice of `brdf-atlas prepare`) against it,
+//! and the time of each size.
+
+use std::time::Instant;
+
+use brdf_atlas_core::measure::{map_error, reference_albedo};
+use brdf_atlas_core::{
+    AlbedoMethod, BlendRule, DEFAULT_SAMPLES, LATTICE_TOLERANCE, Model, NoProgress, View,
+};
+
+use brdf_merl::Quadrature;
+
+use super::measure::{MethodRow, Results, SampleRow, SizeRow};
+use super::plan::Plan;
+use super::timed;
+use crate::error::Error;
+use crate::progress::Bars;
+
+/// The log map's error (against dense references on a small grid) and
+/// time for each sample count.
+pub fn samples(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error> {
+    let view = View::default();
+    let w = 4 * plan.grid;
+    let pixels: Vec<(usize, usize)> = (0..plan.grid)
+        .flat_map(|a| (0..plan.grid).map(move |b| (2 + 4 * a, 2 + 4 * b)))
+        .collect();
+    let dense = Quadrature::dense(model.dims(), 1);
+    let t = Instant::now();
+    let reference = pixels
+        .iter()
+        .map(|&(px, py)| {
+            reference_albedo(
+                model,
+                &view.pixel_to_latent(px as f64, py as f64, w, w),
+                BlendRule::default(),
+                &dense,
+            )
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    r.reference_time = t.elapsed();
+    r.reference_pixels = pixels.len();
+    let bars = Bars::new("map sample counts");
+    for &s in &plan.samples {
+        let small = model.albedo_map(w, w, view, Some(s), &NoProgress)?;
+        let (max_err, mean_err) = map_error(&small, &pixels, &reference);
+        let size = plan.timed_size;
+        let (map, time) = timed(plan.repeat, || {
+            Ok(model.albedo_map(size, size, view, Some(s), &bars)?)
+        })?;
+        let bins = match map.method {
+            AlbedoMethod::Quadrature { bins, .. } => bins,
+            _ => 0,
+        };
+        r.samples.push(SampleRow {
+            samples: s,
+            bins,
+            max_err,
+            mean_err,
+            time,
+        });
+    }
+    Ok(())
+}
+
+/// The default map (the albedo field where it fits its budget) and the
+/// per-pixel rule with the default samples, at random pixels of the default
+/// view and of one a hundred times smaller: error against dense references
+/// and time, first and again (a field is kept by the model).
+pub fn methods(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error> {
+    let size = plan.timed_size;
+    let small = View::zoomed_hundredfold();
+    let mut seed = 0x5eed_u64;
+    let mut next = || {
+        seed = seed
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        ((seed >> 33) as usize) % size
+    };
+    // The prepared map, built once for both views (if the plan says so).
+    let t = Instant::now();
+    let lattice = match plan.prepare {
+        true => Some(model.prepare_map(BlendRule::default(), LATTICE_TOLERANCE, &NoProgress)?),
+        false => None,
+    };
+    let build = t.elapsed();
+    for (name, view) in [("default", View::default()), ("1/100", small)] {
+        let pixels: Vec<(usize, usize)> = (0..plan.grid * plan.grid)
+            .map(|_| (next(), next()))
+            .collect();
+        let reference = pixels
+            .iter()
+            .map(|&(px, py)| {
+                let x = view.pixel_to_latent(px as f64, py as f64, size, size);
+                reference_albedo(model, &x, BlendRule::default(), model.albedo_rule())
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        for samples in [None, Some(DEFAULT_SAMPLES)] {
+            let t = Instant::now();
+            let map = model.albedo_map(size, size, view, samples, &NoProgress)?;
+            let first = t.elapsed();
+            let t = Instant::now();
+            model.albedo_map(size, size, view, samples, &NoProgress)?;
+            let again = t.elapsed();
+            let (max_err, mean_err) = map_error(&map, &pixels, &reference);
+            let (method, field) = match map.method {
+                AlbedoMethod::Field { nodes, .. } => (format!("field, {nodes} exact nodes"), true),
+                AlbedoMethod::Lattice { nodes, .. } => (format!("lattice, {nodes} nodes"), true),
+                AlbedoMethod::Quadrature { samples, .. } => {
+                    (format!("per pixel, {samples} samples"), false)
+                }
+                AlbedoMethod::Linear => ("linear".into(), false),
+            };
+            let method = match samples {
+                None => format!("default ({method})"),
+                Some(_) => method,
+            };
+            r.methods.push(MethodRow {
+                view: name,
+                method,
+                field,
+                prepared: false,
+                max_err,
+                mean_err,
+                first,
+                again,
+            });
+        }
+        let Some(lattice) = &lattice else {
+            continue;
+        };
+        let t = Instant::now();
+        let map = model.albedo_map_prepared(lattice, size, size, view, &NoProgress)?;
+        let again = t.elapsed();
+        let (max_err, mean_err) = map_error(&map, &pixels, &reference);
+        r.methods.push(MethodRow {
+            view: name,
+            method: format!("prepared lattice, {} exact albedos", lattice.nodes()),
+            field: false,
+            prepared: true,
+            max_err,
+            mean_err,
+            first: build + again,
+            again,
+        });
+    }
+    r.methods_size = size;
+    Ok(())
+}
+
+/// The time of a map of each size, log (default samples) and raw (linear).
+pub fn sizes(log: &Model, raw: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error> {
+    let view = View::default();
+    for &s in &plan.sizes {
+        let (_, t) = timed(plan.repeat, || {
+            Ok(log.albedo_map(s, s, view, Some(DEFAULT_SAMPLES), &NoProgress)?)
+        })?;
+        r.sizes.push(SizeRow {
+            method: format!("log, {DEFAULT_SAMPLES} samples"),
+            size: s,
+            time: t,
+        });
+        let (_, t) = timed(plan.repeat, || {
+            Ok(raw.albedo_map(s, s, view, None, &NoProgress)?)
+        })?;
+        r.sizes.push(SizeRow {
+            method: "raw, linear".into(),
+            size: s,
+            time: t,
+        });
+    }
+    Ok(())
+}
