@@ -210,6 +210,24 @@ fn a_saved_lattice_draws_every_map_inside_the_default_view() {
 }
 
 #[test]
+fn bad_requests_are_refused_in_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = Model::open(common::fit(dir.path(), 4, TransformKind::Log)).unwrap();
+    for (rule, tolerance, want) in [
+        (BlendRule::Plausible, LATTICE_TOLERANCE, "plausible"),
+        (BlendRule::Floor, 0.0, "tolerance"),
+        (BlendRule::Floor, f64::NAN, "tolerance"),
+    ] {
+        let why = model
+            .prepare_map(rule, tolerance, &NoProgress)
+            .err()
+            .expect("refused")
+            .to_string();
+        assert!(why.contains(want) && !why.contains('\n'), "{why}");
+    }
+}
+
+#[test]
 fn a_lattice_of_another_fit_or_a_damaged_one_is_named_and_left_aside() {
     let dir = tempfile::tempdir().unwrap();
     let (model, lattice) = prepared(dir.path(), 6, BlendRule::Floor);
@@ -230,6 +248,12 @@ fn a_lattice_of_another_fit_or_a_damaged_one_is_named_and_left_aside() {
         "{why}"
     );
     assert!(!why.contains('\n'), "{why}");
+    let handed = refit.albedo_map_prepared(&lattice, 8, 8, View::default(), &NoProgress);
+    let why = handed
+        .err()
+        .expect("a lattice of another fit, handed over")
+        .to_string();
+    assert!(why.contains("another fit"), "{why}");
     let map = refit
         .albedo_map(16, 16, View::default(), None, &NoProgress)
         .unwrap();
