@@ -250,8 +250,7 @@ fn a_lattice_of_another_fit_or_a_damaged_one_is_named_and_left_aside() {
     assert!(!why.contains('\n'), "{why}");
     let handed = refit.albedo_map_prepared(&lattice, 8, 8, View::default(), &NoProgress);
     let why = handed
-        .err()
-        .expect("a lattice of another fit, handed over")
+        .expect_err("a lattice of another fit, handed over")
         .to_string();
     assert!(why.contains("another fit"), "{why}");
     let map = refit
