@@ -15,6 +15,7 @@ pub mod map;
 mod overlay;
 mod paint;
 pub mod plausibility;
+mod prepared;
 pub mod reconstruct;
 pub mod render;
 pub mod sheet;
