@@ -29,7 +29,7 @@ impl Model {
     /// Build the prepared map of the default view of `rule`'s material
     /// (the gp or floor rule), refined until each cell's cubic is within
     /// `tolerance` of the exact albedos at the finer lattice's new nodes
-    /// (module docs). Several minutes on two cores for 100 materials at full
+    /// ([`crate::query::lattice`]). Several minutes on two cores for 100 materials at full
     /// resolution (about ten thousand exact albedos). Cancelled through
     /// `progress` it returns [`CoreError::Cancelled`].
     pub fn prepare_map(
@@ -39,18 +39,13 @@ impl Model {
         progress: &dyn Progress,
     ) -> Result<AlbedoLattice> {
         floor_of(rule)?;
-        if self.q() != 2 {
-            return Err(CoreError::BadQuery(format!(
-                "a map needs a 2-D latent space, this model has q = {}",
-                self.q()
-            )));
-        }
+        let view = View::default();
+        self.check_map_request(1, 1, view)?;
         if !(tolerance > 0.0 && tolerance.is_finite()) {
             return Err(CoreError::BadQuery(format!(
                 "the lattice's tolerance must be positive, not {tolerance}"
             )));
         }
-        let view = View::default();
         let n = 1usize << FINEST;
         let mut nodes: HashMap<Key, [f64; 3]> = HashMap::new();
         let point = |(i, j): Key| {
