@@ -175,8 +175,10 @@ pub fn dims(text: &str) -> Result<Dims, String> {
 pub enum TransformArg {
     /// The reflectance itself (1/sr).
     Raw,
-    /// log(1 + f cos_i cos_o): highlights weigh less.
+    /// log(1 + f cos_i cos_o): highlights weigh less, dark materials look alike.
     Log,
+    /// log(1 + f cos_i cos_o / 0.001): relative differences count alike, dark or bright.
+    RelLog,
 }
 
 impl From<TransformArg> for TransformKind {
@@ -184,6 +186,7 @@ impl From<TransformArg> for TransformKind {
         match t {
             TransformArg::Raw => TransformKind::Raw,
             TransformArg::Log => TransformKind::Log,
+            TransformArg::RelLog => TransformKind::RelLog,
         }
     }
 }

@@ -46,7 +46,7 @@ class Model:
     @property
     def latent_dim(self) -> int: ...
     @property
-    def transform(self) -> Literal["log", "raw"]: ...
+    def transform(self) -> Literal["rel-log", "log", "raw"]: ...
     @property
     def dims(self) -> Tuple[int, int, int]: ...
     def __len__(self) -> int: ...
@@ -71,11 +71,11 @@ def fit(
     out: _Path,
     *,
     q: int = 2,
-    transform: Literal["log", "raw"] = "log",
+    transform: Literal["rel-log", "log", "raw"] = "rel-log",
     optimizer: Literal["hooke-jeeves", "lbfgs"] = "lbfgs",
     store_precision: Literal["f32", "f64"] = "f32",
-    length_scale: float = 1.0,
-    noise: float = 1e-4,
+    length_scale: float = 0.3,
+    noise: float = 3e-5,
     min_step: float = 1e-3,
     progress: Optional[Callable[[str, int, int], object]] = None,
 ) -> dict: ...

@@ -124,8 +124,8 @@ fn choice<T>(value: &str, option: &str, parse: fn(&str) -> Option<T>, names: &st
 /// `iterations`, `evaluations`, and `seconds` (per phase: scan, store,
 /// optimise, save).
 #[pyfunction]
-#[pyo3(signature = (merl_dir, out, *, q = 2, transform = "log", optimizer = "lbfgs",
-                    store_precision = "f32", length_scale = 1.0, noise = 1e-4, min_step = 1e-3,
+#[pyo3(signature = (merl_dir, out, *, q = 2, transform = "rel-log", optimizer = "lbfgs",
+                    store_precision = "f32", length_scale = 0.3, noise = 3e-5, min_step = 1e-3,
                     progress = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit<'py>(
@@ -145,7 +145,7 @@ pub fn fit<'py>(
         transform,
         "transform",
         TransformKind::parse,
-        "\"log\" or \"raw\"",
+        "\"rel-log\", \"log\" or \"raw\"",
     )?;
     let optimizer = choice(
         optimizer,

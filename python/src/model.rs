@@ -128,7 +128,7 @@ impl PyModel {
         self.inner.q()
     }
 
-    /// The data transform: "log" or "raw".
+    /// The data transform: "rel-log", "log" or "raw".
     #[getter]
     fn transform(&self) -> &'static str {
         self.inner.file().transform.name()

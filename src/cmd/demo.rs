@@ -11,7 +11,7 @@ use brdf_merl::Dims;
 
 use super::info::{self, Summary};
 use super::{fit, map, reconstruct, report, synth};
-use crate::args::{OptimizerArg, PrecisionArg, TransformArg};
+use crate::args::OptimizerArg;
 use crate::error::Error;
 use crate::format::{secs, size};
 
@@ -170,21 +170,9 @@ fn summarise(state: &mut State) -> Result<(), Error> {
     Ok(())
 }
 
-/// Fit the database with the default settings and the log transform.
+/// Fit the database with the default settings.
 fn fit_model(state: &mut State) -> Result<(), Error> {
-    let args = fit::Args {
-        dir: merl_dir(state.args),
-        model: state.args.dir.join(MODEL),
-        q: 2,
-        transform: TransformArg::Log,
-        optimizer: OptimizerArg::Lbfgs,
-        store_precision: PrecisionArg::F32,
-        length_scale: fit::DEFAULT_LENGTH_SCALE,
-        noise: fit::DEFAULT_NOISE,
-        learn_kernel: false,
-        min_step: fit::DEFAULT_MIN_STEP,
-        rebuild_store: false,
-    };
+    let args = fit::Args::new(merl_dir(state.args), state.args.dir.join(MODEL));
     let fitted = fit::fit(&args)?;
     indented(|out| Ok(fit::write_summary(out, &args, &fitted)?))?;
     state.model = Some(Model::open(&args.model)?);

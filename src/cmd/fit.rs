@@ -5,8 +5,12 @@ use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+use brdf_atlas_core::fidelity::{Fidelity, GIVES_BACK, Summary};
 use brdf_atlas_core::limits::MAX_Q;
-use brdf_atlas_core::{Dataset, GplvmParams, OptimizerKind, Store};
+use brdf_atlas_core::{
+    DEFAULT_KERNEL, DEFAULT_TRANSFORM, Dataset, GplvmParams, Kernel, OptimizerKind,
+    PAPER_KERNEL, PAPER_TRANSFORM, Store, TransformKind,
+};
 use brdf_atlas_core::{FitOptions, FitReport, StorePolicy, fit_dir_with, store_path_for};
 
 use crate::args::{OptimizerArg, PrecisionArg, TransformArg};
@@ -14,10 +18,6 @@ use crate::error::Error;
 use crate::format::{cost, secs, size};
 use crate::progress::Bars;
 
-/// `--length-scale` when not given.
-pub const DEFAULT_LENGTH_SCALE: f64 = 1.0;
-/// `--noise` when not given.
-pub const DEFAULT_NOISE: f64 = 1e-4;
 /// `--min-step` when not given.
 pub const DEFAULT_MIN_STEP: f64 = 1e-3;
 
@@ -41,22 +41,29 @@ pub struct Args {
     pub model: PathBuf,
     #[arg(long, default_value_t = 2, help = q_help())]
     pub q: usize,
-    /// Space the model sees the values in: `log` compresses highlights
-    /// (log(1 + f cos_i cos_o)), `raw` is the reflectance itself.
-    #[arg(long, value_enum, default_value_t = TransformArg::Log)]
-    pub transform: TransformArg,
+    /// Space the model sees the values in: `rel-log` (the default,
+    /// ln(1 + f cos_i cos_o / 0.001)) weighs relative differences alike in
+    /// dark and bright materials, `log` (ln(1 + f cos_i cos_o)) makes dark
+    /// materials look alike, `raw` is the reflectance itself.
+    #[arg(long, value_enum)]
+    pub transform: Option<TransformArg>,
+    /// The settings of Soler et al. 2018 with the earlier `log` transform:
+    /// `--transform log --length-scale 1 --noise 1e-4`, each of which may
+    /// still be given to change it.
+    #[arg(long)]
+    pub paper: bool,
     /// Optimiser of the latent points.
     #[arg(long, value_enum, default_value_t = OptimizerArg::Lbfgs)]
     pub optimizer: OptimizerArg,
     /// Precision of the stored data (sums are always in f64).
     #[arg(long, value_enum, default_value_t = PrecisionArg::F32)]
     pub store_precision: PrecisionArg,
-    /// RBF kernel length scale.
-    #[arg(long, default_value_t = DEFAULT_LENGTH_SCALE, allow_negative_numbers = true)]
-    pub length_scale: f64,
-    /// Noise added to the kernel diagonal.
-    #[arg(long, default_value_t = DEFAULT_NOISE, allow_negative_numbers = true)]
-    pub noise: f64,
+    /// RBF kernel length scale [default: 0.3; 1 with --paper].
+    #[arg(long, allow_negative_numbers = true)]
+    pub length_scale: Option<f64>,
+    /// Noise added to the kernel diagonal [default: 3e-5; 1e-4 with --paper].
+    #[arg(long, allow_negative_numbers = true)]
+    pub noise: Option<f64>,
     /// Learn the length scale and noise by maximum likelihood together with
     /// the latent points (needs `--optimizer lbfgs`); `--length-scale` and
     /// `--noise` are then where the search starts.
@@ -72,6 +79,44 @@ pub struct Args {
     /// change the search).
     #[arg(long)]
     pub rebuild_store: bool,
+}
+
+impl Args {
+    /// The fit's settings as given, with the defaults (or `--paper`'s) for the rest.
+    pub fn new(dir: PathBuf, model: PathBuf) -> Args {
+        Args {
+            dir,
+            model,
+            q: 2,
+            transform: None,
+            paper: false,
+            optimizer: OptimizerArg::Lbfgs,
+            store_precision: PrecisionArg::F32,
+            length_scale: None,
+            noise: None,
+            learn_kernel: false,
+            min_step: DEFAULT_MIN_STEP,
+            rebuild_store: false,
+        }
+    }
+
+    /// The transform: as given, else the paper's with `--paper`, else the default.
+    pub fn transform(&self) -> TransformKind {
+        match (self.transform, self.paper) {
+            (Some(t), _) => t.into(),
+            (None, true) => PAPER_TRANSFORM,
+            (None, false) => DEFAULT_TRANSFORM,
+        }
+    }
+
+    /// The kernel: each value as given, else the paper's with `--paper`, else the default.
+    pub fn kernel(&self) -> Kernel {
+        let base = if self.paper { PAPER_KERNEL } else { DEFAULT_KERNEL };
+        Kernel {
+            length_scale: self.length_scale.unwrap_or(base.length_scale),
+            noise: self.noise.unwrap_or(base.noise),
+        }
+    }
 }
 
 /// `--q`'s help, with the bound the fit checks ([`MAX_Q`]).
@@ -97,9 +142,10 @@ pub struct Fitted {
 /// after writing a new store removes it again, so a failed run leaves no
 /// store without a model.
 pub fn fit(args: &Args) -> Result<Fitted, Error> {
+    let kernel = args.kernel();
     let params = GplvmParams::new(args.q)
-        .length_scale(args.length_scale)
-        .noise(args.noise)
+        .length_scale(kernel.length_scale)
+        .noise(kernel.noise)
         .optimizer(args.optimizer.into())
         .learn_kernel(args.learn_kernel)
         .min_step(args.min_step)
@@ -119,7 +165,7 @@ pub fn fit(args: &Args) -> Result<Fitted, Error> {
     }
     let fit_options = FitOptions {
         params,
-        transform: args.transform.into(),
+        transform: args.transform(),
         precision: args.store_precision.into(),
     };
     let store_path = store_path_for(&args.model);
@@ -248,10 +294,11 @@ pub fn write_summary(out: &mut impl Write, args: &Args, fitted: &Fitted) -> io::
             parts.join(", ")
         )?;
     }
-    let total = r.scan_time + r.store_time + r.optimise_time + r.save_time;
+    write_fidelity(out, &r.fidelity, &r.names)?;
+    let total = r.scan_time + r.store_time + r.optimise_time + r.fidelity_time + r.save_time;
     writeln!(
         out,
-        "  time       scan {}, {} {}, optimise {}, save {}, total {}",
+        "  time       scan {}, {} {}, optimise {}, own points {}, save {}, total {}",
         secs(r.scan_time),
         if r.store_reused {
             "store check"
@@ -260,7 +307,56 @@ pub fn write_summary(out: &mut impl Write, args: &Args, fitted: &Fitted) -> io::
         },
         secs(r.store_time),
         secs(r.optimise_time),
+        secs(r.fidelity_time),
         secs(r.save_time),
         secs(total)
     )
+}
+
+/// How the materials come back at their own points, and which do not.
+pub fn write_fidelity(out: &mut impl Write, f: &Fidelity, names: &[String]) -> io::Result<()> {
+    let own = Summary::of(&f.own);
+    let gp = Summary::of(&f.own_gp);
+    writeln!(
+        out,
+        "  own points albedo off by {} at the median, {} at worst (largest channel; GP's own blend {}, {}); \
+         log-relative table error {:.3} median, {:.3} worst",
+        percent(own.albedo.median),
+        percent(own.albedo.worst),
+        percent(gp.albedo.median),
+        percent(gp.albedo.worst),
+        own.log_rel.median,
+        own.log_rel.worst,
+    )?;
+    let missed: Vec<usize> = (0..f.own.len()).filter(|&i| !f.own[i].gives_back()).collect();
+    if missed.is_empty() {
+        return writeln!(
+            out,
+            "             every material's point gives it back (albedo within {} in every channel)",
+            percent(GIVES_BACK)
+        );
+    }
+    writeln!(
+        out,
+        "  warning    {} of {} materials are not given back at their own point (albedo off by more than {}):",
+        missed.len(),
+        f.own.len(),
+        percent(GIVES_BACK)
+    )?;
+    for i in missed {
+        writeln!(out, "             {}: its point {}", names[i], f.own[i].describe())?;
+    }
+    Ok(())
+}
+
+/// A share as a percentage with two significant figures or so.
+fn percent(x: f64) -> String {
+    let p = 100.0 * x;
+    if p >= 10.0 {
+        format!("{p:.0}%")
+    } else if p >= 1.0 {
+        format!("{p:.1}%")
+    } else {
+        format!("{p:.2}%")
+    }
 }

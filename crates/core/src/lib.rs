@@ -44,10 +44,11 @@ mod simd;
 
 pub use data::{Dataset, Precision, Rows, Store, StoreIdentity, TransformKind, build_store};
 pub use error::{CoreError, ParamError, Result};
-pub use eval::{loo, measure};
+pub use eval::{fidelity, loo, measure};
 pub use gplvm::optim;
 pub use gplvm::{CheckedParams, DriftStats, Fit, GplvmParams, GramData, Kernel, OptimizerKind};
 pub use model::{
+    DEFAULT_KERNEL, DEFAULT_TRANSFORM, PAPER_KERNEL, PAPER_TRANSFORM,
     FitOptions, FitRecord, FitReport, InputIdentity, Model, ModelFile, StorePolicy, StoreRef,
     fit_dir, fit_dir_with, store_path_for,
 };

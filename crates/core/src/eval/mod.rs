@@ -2,6 +2,7 @@
 //! of albedo maps against a dense reference.
 
 mod albedo_floor;
+pub mod fidelity;
 pub mod loo;
 pub mod measure;
 mod nonneg;

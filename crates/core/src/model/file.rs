@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::data::{Dataset, Precision, Store, StoreIdentity, TransformKind};
 use crate::error::{CoreError, Result};
+use crate::eval::fidelity::Fidelity;
 use crate::gplvm::kernel::{Kernel, rows_of};
 use crate::gplvm::{DriftStats, Fit, GramData, OptimizerKind};
 use crate::limits::{LATENT_LIMIT, MAX_MATERIALS, MAX_Q};
@@ -102,6 +103,11 @@ pub struct ModelFile {
     /// it anew. Absent in models written before it was recorded.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub inputs: Option<Vec<InputIdentity>>,
+    /// Each material at its own point judged against itself, as the fit
+    /// measured it ([`crate::fidelity`]). Absent in models written before
+    /// it was measured.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fidelity: Option<Fidelity>,
 }
 
 /// An input file of a fit as the fit saw it: its name in the data
@@ -195,6 +201,7 @@ impl ModelFile {
             gram: rows_of(y),
             store: store_ref,
             inputs: None,
+            fidelity: None,
         }
     }
 }

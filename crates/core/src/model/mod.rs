@@ -28,7 +28,10 @@ mod recent;
 pub(crate) use recent::Recent;
 
 pub use file::{FitRecord, InputIdentity, ModelFile, StoreRef, store_path_for};
-pub use fit::{FitOptions, FitReport, StorePolicy, fit_dir, fit_dir_with};
+pub use fit::{
+    DEFAULT_KERNEL, DEFAULT_TRANSFORM, FitOptions, FitReport, PAPER_KERNEL, PAPER_TRANSFORM,
+    StorePolicy, fit_dir, fit_dir_with,
+};
 
 /// An opened model: the file, its store mapped, `K` factorised.
 pub struct Model {

@@ -84,11 +84,16 @@ pub(crate) fn step_values(g: f64, c: f64, form: InverseForm) -> [f64; 13] {
 /// (docs/plausibility.md).
 pub const CONVEX_LENGTH_RATIO: f64 = 0.3;
 
-/// The convex weights at `x`: `exp(-|x - x_i|^2 / (2 l^2)) / sum`, with
-/// `l` the kernel's length scale times [`CONVEX_LENGTH_RATIO`], computed
-/// relative to the nearest material so they never underflow (far from the
-/// data they tend to the nearest material alone). Material `skip` (if any)
-/// gets weight 0, as in leave-one-out.
+/// The convex weights at `x`: `exp(-|x - x_i|^2 / (2 l^2)) / |x - x_i|^2`,
+/// normalised, with `l` the kernel's length scale times
+/// [`CONVEX_LENGTH_RATIO`], computed relative to the nearest material so
+/// they never underflow (far from the data they tend to the nearest
+/// material alone). The inverse square distance (Shepard's) makes the blend
+/// interpolate: at a material's own point it is that material alone, so a
+/// rule that lies on the convex blend there gives the material back. A
+/// point within [`SAME_POINT`] of materials gives them equal weights, all
+/// others none. Material `skip` (if any) gets weight 0, as in
+/// leave-one-out.
 pub(crate) fn convex_weights(
     latent: &[Vec<f64>],
     x: &[f64],
@@ -108,13 +113,22 @@ pub(crate) fn convex_weights(
         })
         .collect();
     let nearest = d2.iter().copied().fold(f64::INFINITY, f64::min);
-    let k: Vec<f64> = d2
-        .iter()
-        .map(|d| (-(d - nearest) / (2.0 * l * l)).exp())
-        .collect();
+    let same = (SAME_POINT * l).powi(2);
+    let k: Vec<f64> = if nearest <= same {
+        d2.iter().map(|&d| f64::from(u8::from(d <= same))).collect()
+    } else {
+        d2.iter()
+            .map(|&d| (-(d - nearest) / (2.0 * l * l)).exp() * (nearest / d))
+            .collect()
+    };
     let sum: f64 = k.iter().sum();
     k.iter().map(|v| v / sum).collect()
 }
+
+/// Within this share of the convex length scale a point is a material's
+/// own (see [`convex_weights`]): far below any distance the fit leaves
+/// between distinct materials, far above rounding.
+pub(crate) const SAME_POINT: f64 = 1e-9;
 
 impl crate::model::Model {
     /// The convex weights ([`convex_weights`]) at each of `points`, with the

@@ -32,7 +32,7 @@ pub const FLOOR_SHARE: f64 = 0.3;
 
 /// The floor's softness `d`, in units of the convex blend's value: the
 /// width of the bend between the GP's value and the floor.
-pub const FLOOR_SOFTNESS: f64 = 0.2;
+pub const FLOOR_SOFTNESS: f64 = 0.05;
 
 /// The rule's value of a row from its GP value `g` and convex value `c`
 /// (transformed space), with [`FLOOR_SHARE`] and [`FLOOR_SOFTNESS`].

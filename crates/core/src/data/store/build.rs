@@ -441,7 +441,7 @@ mod tests {
         assert_eq!(data.len(), 5);
         assert_eq!(data.ignored.len(), 1);
         let tables: Vec<_> = data.files.iter().map(|f| f.to_table()).collect();
-        for transform in [TransformKind::Raw, TransformKind::Log] {
+        for transform in TransformKind::ALL {
             for precision in [Precision::F64, Precision::F32] {
                 let out =
                     tmp.path()

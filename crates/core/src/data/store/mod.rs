@@ -212,10 +212,9 @@ impl Store {
             b => return Err(bad(format!("{b} bytes per value, expected 4 or 8"))),
         };
         let n = u32_at(16) as usize;
-        let transform = match u32_at(20) {
-            0 => TransformKind::Raw,
-            1 => TransformKind::Log,
-            t => return Err(bad(format!("unknown transform code {t}"))),
+        let transform = match TransformKind::ALL.get(u32_at(20) as usize) {
+            Some(&t) => t,
+            None => return Err(bad(format!("unknown transform code {}", u32_at(20)))),
         };
         let dims = Dims::new(
             u32_at(24) as usize,
