@@ -8,8 +8,8 @@ use std::process::ExitCode;
 use brdf_atlas_core::fidelity::{Fidelity, GIVES_BACK, Summary};
 use brdf_atlas_core::limits::MAX_Q;
 use brdf_atlas_core::{
-    DEFAULT_KERNEL, DEFAULT_TRANSFORM, Dataset, GplvmParams, Kernel, OptimizerKind,
-    PAPER_KERNEL, PAPER_TRANSFORM, Store, TransformKind,
+    DEFAULT_KERNEL, DEFAULT_TRANSFORM, Dataset, GplvmParams, Kernel, OptimizerKind, PAPER_KERNEL,
+    PAPER_TRANSFORM, Store, TransformKind,
 };
 use brdf_atlas_core::{FitOptions, FitReport, StorePolicy, fit_dir_with, store_path_for};
 
@@ -111,7 +111,11 @@ impl Args {
 
     /// The kernel: each value as given, else the paper's with `--paper`, else the default.
     pub fn kernel(&self) -> Kernel {
-        let base = if self.paper { PAPER_KERNEL } else { DEFAULT_KERNEL };
+        let base = if self.paper {
+            PAPER_KERNEL
+        } else {
+            DEFAULT_KERNEL
+        };
         Kernel {
             length_scale: self.length_scale.unwrap_or(base.length_scale),
             noise: self.noise.unwrap_or(base.noise),
@@ -328,7 +332,9 @@ pub fn write_fidelity(out: &mut impl Write, f: &Fidelity, names: &[String]) -> i
         own.log_rel.median,
         own.log_rel.worst,
     )?;
-    let missed: Vec<usize> = (0..f.own.len()).filter(|&i| !f.own[i].gives_back()).collect();
+    let missed: Vec<usize> = (0..f.own.len())
+        .filter(|&i| !f.own[i].gives_back())
+        .collect();
     if missed.is_empty() {
         return writeln!(
             out,
@@ -344,7 +350,12 @@ pub fn write_fidelity(out: &mut impl Write, f: &Fidelity, names: &[String]) -> i
         percent(GIVES_BACK)
     )?;
     for i in missed {
-        writeln!(out, "             {}: its point {}", names[i], f.own[i].describe())?;
+        writeln!(
+            out,
+            "             {}: its point {}",
+            names[i],
+            f.own[i].describe()
+        )?;
     }
     Ok(())
 }

@@ -29,9 +29,7 @@ fn line(what: &str, judged: &[Judged]) {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let path = std::env::args()
-        .nth(1)
-        .ok_or("usage: fidelity MODEL")?;
+    let path = std::env::args().nth(1).ok_or("usage: fidelity MODEL")?;
     let model = Model::open(&path)?;
     let every = if std::env::var_os("FIDELITY_EVERY_BIN").is_some() {
         Every::BIN
@@ -47,12 +45,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         every,
         &NoProgress,
     )?;
-    println!("{} materials, one pass in {:.2} s; median / 90th percentile / worst", model.names().len(), t.elapsed().as_secs_f64());
+    println!(
+        "{} materials, one pass in {:.2} s; median / 90th percentile / worst",
+        model.names().len(),
+        t.elapsed().as_secs_f64()
+    );
     line("own point (default)", &f.own);
     line("own point (GP blend)", &f.own_gp);
     let held = f.held_out.as_deref().unwrap_or_default();
     line("leave-one-out", held);
-    line("leave-one-out (GP)", f.held_out_gp.as_deref().unwrap_or_default());
+    line(
+        "leave-one-out (GP)",
+        f.held_out_gp.as_deref().unwrap_or_default(),
+    );
     let x = model.latent();
     let n = x.nrows();
     let mut nn: Vec<f64> = (0..n)

@@ -48,9 +48,9 @@ pub use eval::{fidelity, loo, measure};
 pub use gplvm::optim;
 pub use gplvm::{CheckedParams, DriftStats, Fit, GplvmParams, GramData, Kernel, OptimizerKind};
 pub use model::{
-    DEFAULT_KERNEL, DEFAULT_TRANSFORM, PAPER_KERNEL, PAPER_TRANSFORM,
-    FitOptions, FitRecord, FitReport, InputIdentity, Model, ModelFile, StorePolicy, StoreRef,
-    fit_dir, fit_dir_with, store_path_for,
+    DEFAULT_KERNEL, DEFAULT_TRANSFORM, FitOptions, FitRecord, FitReport, InputIdentity, Model,
+    ModelFile, PAPER_KERNEL, PAPER_TRANSFORM, StorePolicy, StoreRef, fit_dir, fit_dir_with,
+    store_path_for,
 };
 pub use progress::{NoProgress, Progress};
 pub use query::{

@@ -25,16 +25,18 @@ fn floor(g: f64, c: f64) -> f64 {
     c * (FLOOR_SHARE + FLOOR_SOFTNESS * softplus)
 }
 
-/// The convex weights at `x`: Gaussians of width `CONVEX_LENGTH_RATIO l`, normalised.
+/// The convex weights at `x`: Gaussians of width `CONVEX_LENGTH_RATIO l`
+/// over the squared distance, normalised (a material's own point: it alone).
 fn convex(m: &Model, x: &[f64; 2]) -> Vec<f64> {
     let l = m.file().kernel.length_scale * CONVEX_LENGTH_RATIO;
     let lat = m.latent();
-    let k: Vec<f64> = (0..lat.nrows())
-        .map(|i| {
-            let d2 = (lat[(i, 0)] - x[0]).powi(2) + (lat[(i, 1)] - x[1]).powi(2);
-            (-d2 / (2.0 * l * l)).exp()
-        })
+    let d2: Vec<f64> = (0..lat.nrows())
+        .map(|i| (lat[(i, 0)] - x[0]).powi(2) + (lat[(i, 1)] - x[1]).powi(2))
         .collect();
+    if let Some(i) = d2.iter().position(|&d| d == 0.0) {
+        return (0..d2.len()).map(|j| f64::from(u8::from(j == i))).collect();
+    }
+    let k: Vec<f64> = d2.iter().map(|&d| (-d / (2.0 * l * l)).exp() / d).collect();
     let sum: f64 = k.iter().sum();
     k.iter().map(|v| v / sum).collect()
 }
@@ -45,8 +47,9 @@ fn inverse(kind: TransformKind, bin: usize, v: f64) -> f64 {
     let c = (ci * co).max(0.0);
     match kind {
         TransformKind::Raw => v,
-        TransformKind::Log if c < 1e-6 => 0.0,
+        TransformKind::Log | TransformKind::RelLog if c < 1e-6 => 0.0,
         TransformKind::Log => v.exp_m1() / c,
+        TransformKind::RelLog => 1e-3 * v.exp_m1() / c,
     }
 }
 

@@ -38,8 +38,9 @@ fn dense_clamp_by<'a>(m: &Model, w: impl Fn(usize) -> &'a [f64], only: Option<us
         // The inverse transforms before their clamp (TransformKind::formula).
         let f = match kind {
             TransformKind::Raw => v,
-            TransformKind::Log if c < 1e-6 => 0.0,
+            TransformKind::Log | TransformKind::RelLog if c < 1e-6 => 0.0,
             TransformKind::Log => v.exp_m1() / c,
+            TransformKind::RelLog => 1e-3 * v.exp_m1() / c,
         };
         acc[0] += (-f).max(0.0) * c;
         acc[1] += f.abs() * c;
@@ -142,7 +143,7 @@ fn the_plausible_rule_keeps_every_theta_h_bin_within_budget_and_the_gp_where_it_
                     let d2 = (0..2)
                         .map(|c| (m.latent()[(i, c)] - x[c]).powi(2))
                         .sum::<f64>();
-                    (-d2 / (2.0 * l * l)).exp()
+                    (-d2 / (2.0 * l * l)).exp() / d2
                 })
                 .collect();
             let sum: f64 = k.iter().sum();
@@ -226,7 +227,7 @@ fn the_plausible_rule_brings_the_largest_albedo_to_one() {
         let nearest = d2.iter().copied().fold(f64::INFINITY, f64::min);
         let k: Vec<f64> = d2
             .iter()
-            .map(|d| (-(d - nearest) / (2.0 * l * l)).exp())
+            .map(|d| (-(d - nearest) / (2.0 * l * l)).exp() * (nearest / d))
             .collect();
         let sum: f64 = k.iter().sum();
         let v: Vec<f64> = k.iter().map(|k| k / sum).collect();

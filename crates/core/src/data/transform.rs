@@ -55,8 +55,11 @@ impl TransformKind {
     }
 
     /// Every kind, in the order of their store codes.
-    pub const ALL: [TransformKind; 3] =
-        [TransformKind::Raw, TransformKind::Log, TransformKind::RelLog];
+    pub const ALL: [TransformKind; 3] = [
+        TransformKind::Raw,
+        TransformKind::Log,
+        TransformKind::RelLog,
+    ];
 
     /// The transform and its inverse as formulas, with their constants:
     /// what a record of a reconstruction states.

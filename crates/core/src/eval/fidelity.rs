@@ -236,35 +236,43 @@ pub fn fidelity(
     every: Every,
     progress: &dyn Progress,
 ) -> Result<Fidelity> {
-    let mut predictors = vec![
-        own_point_predictor(kernel, latent)?,
-        own_convex_predictor(kernel, latent),
-    ];
-    let mut mixes = vec![Mix {
-        from: 0,
-        towards: 1,
-        how: Mixing::Floor,
-    }];
+    // Outputs: the matrix predictors, then the mixes; a convex blend only
+    // feeds its mix. At the own points it is the material itself unless
+    // two materials share a point: then it takes a product of its own.
+    let convex = own_convex_predictor(kernel, latent);
+    let n = latent.nrows();
+    let itself = (0..n).all(|i| (0..n).all(|j| convex[(i, j)] == f64::from(u8::from(i == j))));
+    let mut predictors = vec![own_point_predictor(kernel, latent)?];
+    let mut scored = vec![true];
+    let own_floor = if itself {
+        Mix {
+            from: 0,
+            towards: 0,
+            how: Mixing::FloorOnSelf,
+        }
+    } else {
+        predictors.push(convex);
+        scored.push(false);
+        Mix {
+            from: 0,
+            towards: 1,
+            how: Mixing::Floor,
+        }
+    };
+    let mut mixes = vec![own_floor];
+    let gp_held_out = predictors.len();
     if held_out {
-        needs_two(latent.nrows())?;
+        needs_two(n)?;
         predictors.push(gp_predictor(kernel, latent, false)?);
         predictors.push(convex_predictor(kernel, latent)?);
+        scored.extend([true, false]);
         mixes.push(Mix {
-            from: 2,
-            towards: 3,
+            from: gp_held_out,
+            towards: gp_held_out + 1,
             how: Mixing::Floor,
         });
     }
-    // Outputs: the matrix predictors, then the mixes; the convex blends
-    // only feed the mixes.
-    let mut scored = vec![true, false];
-    if held_out {
-        scored.extend([true, false]);
-    }
-    scored.push(true);
-    if held_out {
-        scored.push(true);
-    }
+    scored.extend(mixes.iter().map(|_| true));
     let ev = evaluate_some(store, &predictors, &mixes, Some(&scored), every, progress)?;
     let count = predictors.len();
     let judged = |m: usize| judge(&ev, m);
@@ -272,7 +280,7 @@ pub fn fidelity(
         own: judged(count),
         own_gp: judged(0),
         held_out: held_out.then(|| judged(count + 1)),
-        held_out_gp: held_out.then(|| judged(2)),
+        held_out_gp: held_out.then(|| judged(gp_held_out)),
     })
 }
 
@@ -297,7 +305,10 @@ mod tests {
     fn spread_takes_nearest_ranks() {
         let v: Vec<f64> = (1..=10).map(f64::from).rev().collect();
         let s = Spread::of(&v);
-        assert_eq!((s.median, s.p90, s.worst, s.worst_index), (5.5, 9.0, 10.0, 0));
+        assert_eq!(
+            (s.median, s.p90, s.worst, s.worst_index),
+            (5.5, 9.0, 10.0, 0)
+        );
         let s = Spread::of(&[3.0]);
         assert_eq!((s.median, s.p90, s.worst), (3.0, 3.0, 3.0));
     }
@@ -314,6 +325,10 @@ mod tests {
         assert!((e[0] - 6.25).abs() < 1e-12 && (e[1] - 0.01).abs() < 1e-12 && e[2] == 0.0);
         assert!((j.worst_ratio() - 7.25).abs() < 1e-12);
         assert!(!j.gives_back());
-        assert!(j.describe().starts_with("gives back 7.2x its albedo"), "{}", j.describe());
+        assert!(
+            j.describe().starts_with("gives back 7.2x its albedo"),
+            "{}",
+            j.describe()
+        );
     }
 }

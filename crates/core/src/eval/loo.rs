@@ -161,6 +161,10 @@ pub enum Mixing {
     /// Each value is [`crate::floor::soft_floor`] of the two predictors'
     /// values (with the mean added): [`crate::BlendRule::Floor`].
     Floor,
+    /// [`Mixing::Floor`] onto the material itself (`towards` unused): the
+    /// rule at a material's own point, where the convex blend is the
+    /// material alone, without a product for it.
+    FloorOnSelf,
 }
 
 /// [`evaluate`] with mixed predictors after the matrix ones: the errors
@@ -263,7 +267,7 @@ pub fn evaluate_some(
     let theta_h = store.dims().theta_h;
     let steps_len = |m: &Mix| match &m.how {
         Mixing::Steps(steps) => steps.len(),
-        Mixing::Floor => theta_h * n,
+        Mixing::Floor | Mixing::FloorOnSelf => theta_h * n,
     };
     if let Some(m) = mixes
         .iter()
@@ -345,6 +349,8 @@ pub fn evaluate_some(
                 reflectance: vec![0.0; n],
                 log: vec![0.0; n],
                 rel: vec![0.0; n],
+                predicted: vec![0.0; n],
+                predicted_log: vec![0.0; n],
             },
         },
         |g, range| {
@@ -359,9 +365,7 @@ pub fn evaluate_some(
                     .iter_mut()
                     .zip(&s[r0 * n..(r0 + len) * n])
                     .for_each(|(o, v)| *o = *v as f64),
-                (Rows::F64(s), RowIds::From(r0)) => {
-                    z.copy_from_slice(&s[r0 * n..(r0 + len) * n])
-                }
+                (Rows::F64(s), RowIds::From(r0)) => z.copy_from_slice(&s[r0 * n..(r0 + len) * n]),
                 (Rows::F32(s), RowIds::List(k)) => {
                     for (o, &r) in z.chunks_exact_mut(n).zip(k) {
                         let r = r as usize;
@@ -393,7 +397,10 @@ pub fn evaluate_some(
                     for (m, mix) in mixes.iter().enumerate() {
                         let (from, towards) = (
                             &src[mix.from * n..(mix.from + 1) * n],
-                            &src[mix.towards * n..(mix.towards + 1) * n],
+                            match mix.how {
+                                Mixing::FloorOnSelf => &z[k * n..(k + 1) * n],
+                                _ => &src[mix.towards * n..(mix.towards + 1) * n],
+                            },
                         );
                         let out = &mut dst[mn + m * n..mn + (m + 1) * n];
                         match &mix.how {
@@ -405,7 +412,7 @@ pub fn evaluate_some(
                                     *o = a + t * (b - a);
                                 }
                             }
-                            Mixing::Floor => {
+                            Mixing::Floor | Mixing::FloorOnSelf => {
                                 for ((o, &a), &b) in out.iter_mut().zip(from).zip(towards) {
                                     *o = soft_floor(mean + a, mean + b) - mean;
                                 }
@@ -538,6 +545,9 @@ struct RowScratch {
     reflectance: Vec<f64>,
     log: Vec<f64>,
     rel: Vec<f64>,
+    /// One output's predicted reflectance and cosine-weighted log.
+    predicted: Vec<f64>,
+    predicted_log: Vec<f64>,
 }
 
 /// Add the squared errors of the predictions `out` (`mn` per row) of the
@@ -658,42 +668,46 @@ fn score_block_portable(
             .zip(s.scored)
             .filter(|(_, on)| **on);
         for (((((chunk, ar), al), aq), aa), _) in per_output {
-            let values = ar
-                .iter_mut()
-                .zip(al.iter_mut())
-                .zip(aq.iter_mut())
-                .zip(aa.iter_mut())
-                .zip(chunk)
-                .zip(row.reflectance.iter().zip(&row.log).zip(&row.rel));
-            // One loop per form, so that each compiles to straight-line SIMD.
-            macro_rules! score {
-                (|$t:ident| $fp:expr, |$f:ident| $lp:expr) => {
-                    for (((((ar, al), aq), aa), &p), ((&f, &lv), &rv)) in values {
-                        let $t = m0 + p;
-                        let fp = $fp;
-                        let lp = {
-                            let $f = fp;
-                            $lp
-                        };
-                        let (e, d, q) = (fp - f, lp - lv, log1p(fp * ce) - rv);
-                        *ar += e * e;
-                        *al += d * d;
-                        *aq += q * q;
-                        *aa += w * fp;
-                    }
-                };
-            }
+            // Plain loops over equal slices, one per form, so that each
+            // compiles to straight-line SIMD.
+            let fp = &mut row.predicted[..n];
+            let lp = &mut row.predicted_log[..n];
             match form {
-                // log(1 + f c) of f = (e^t - 1) / c is t itself (for t >= 0).
-                InverseForm::Exp(sc) if s.log_space => score!(
-                    |t| sc * (crate::simd::fastexp::exp(t) - 1.0).max(0.0),
-                    |_f| t.max(0.0)
-                ),
-                InverseForm::Exp(sc) => score!(
-                    |t| sc * (crate::simd::fastexp::exp(t) - 1.0).max(0.0),
-                    |f| log1p(f * c)
-                ),
-                InverseForm::Linear(sc) => score!(|t| (sc * t).max(0.0), |f| log1p(f * c)),
+                InverseForm::Exp(sc) => {
+                    for k in 0..n {
+                        fp[k] = sc * (crate::simd::fastexp::exp(m0 + chunk[k]) - 1.0).max(0.0);
+                    }
+                    if s.log_space {
+                        // log(1 + f c) of f = (e^t - 1) / c is t itself (for t >= 0).
+                        for k in 0..n {
+                            lp[k] = (m0 + chunk[k]).max(0.0);
+                        }
+                    } else {
+                        for k in 0..n {
+                            lp[k] = log1p(fp[k] * c);
+                        }
+                    }
+                }
+                InverseForm::Linear(sc) => {
+                    for k in 0..n {
+                        fp[k] = (sc * (m0 + chunk[k])).max(0.0);
+                    }
+                    for k in 0..n {
+                        lp[k] = log1p(fp[k] * c);
+                    }
+                }
+            }
+            let (f, lv, rv) = (&row.reflectance[..n], &row.log[..n], &row.rel[..n]);
+            let (ar, al, aq, aa) = (&mut ar[..n], &mut al[..n], &mut aq[..n], &mut aa[..n]);
+            for k in 0..n {
+                let e = fp[k] - f[k];
+                let d = lp[k] - lv[k];
+                // ln((v' + e) / (v + e)) = ln(1 + v' / e) - ln(1 + v / e).
+                let q = log1p(fp[k] * ce) - rv[k];
+                ar[k] += e * e;
+                al[k] += d * d;
+                aq[k] += q * q;
+                aa[k] += w * fp[k];
             }
         }
     }

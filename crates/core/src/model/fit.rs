@@ -11,8 +11,8 @@ use brdf_atomic::{Swapped, stage, swap_in};
 use super::file::{InputIdentity, ModelFile, StoreRef, store_path_for};
 use crate::data::{Dataset, Precision, Store, TransformKind, build_store};
 use crate::error::{CoreError, Result};
-use crate::gplvm::Kernel;
 use crate::eval::fidelity::Fidelity;
+use crate::gplvm::Kernel;
 use crate::gplvm::{CheckedParams, Fit, GramData};
 use crate::progress::Progress;
 
