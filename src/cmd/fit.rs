@@ -323,7 +323,7 @@ pub fn write_fidelity(out: &mut impl Write, f: &Fidelity, names: &[String]) -> i
     let gp = Summary::of(&f.own_gp);
     writeln!(
         out,
-        "  own points albedo off by {} at the median, {} at worst (largest channel; GP's own blend {}, {}); \
+        "  own points albedo off by {} per channel at the median, {} at worst (GP's own blend {}, {}); \
          log-relative table error {:.3} median, {:.3} worst",
         percent(own.albedo.median),
         percent(own.albedo.worst),

@@ -40,6 +40,25 @@ pub use crate::eval::loo::LOG_REL_OFFSET;
 /// on a lit sphere beside the original.
 pub const GIVES_BACK: f64 = 0.05;
 
+/// A point within this distance of a material's latent point is its marker
+/// (a click on the marker of a map a few hundred pixels wide).
+pub const MARKER_RADIUS: f64 = 0.01;
+
+/// The material whose marker `x` is (the nearest within [`MARKER_RADIUS`])
+/// and how its own point gives it back, as the fit recorded it (models
+/// written before it was recorded have no record: `None`).
+pub fn marker_at<'a>(file: &'a crate::ModelFile, x: &[f64]) -> Option<(usize, &'a Judged)> {
+    let own = &file.fidelity.as_ref()?.own;
+    let d2 = |p: &[f64]| p.iter().zip(x).map(|(a, b)| (a - b) * (a - b)).sum::<f64>();
+    let (i, d) = file
+        .latent
+        .iter()
+        .map(|p| d2(p))
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(&b.1))?;
+    (d <= MARKER_RADIUS * MARKER_RADIUS).then(|| own.get(i).map(|j| (i, j)))?
+}
+
 /// One material's prediction, judged against the material.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Judged {
