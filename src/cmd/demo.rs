@@ -24,7 +24,8 @@ pub const DEFAULT_COUNT: u32 = 16;
 /// Synthesises materials at the full MERL resolution into DIR/merl/,
 /// summarises them (name and albedo), fits a latent space to them
 /// (DIR/model.atlas), draws its map (DIR/map.png, .json, .exr) and
-/// writes a new material between the first two (DIR/reconstructed.binary).
+/// writes a new material between the two nearest each other on the map
+/// (DIR/reconstructed.binary).
 /// Needs about 35 MB of disk per material, and as much again for the model.
 #[derive(Debug, clap::Args)]
 pub struct Args {
@@ -65,7 +66,7 @@ const STEPS: &[Step] = &[
     ("Fit a 2-D latent space to it (log transform)", fit_model),
     ("Draw the albedo map of the latent space", draw_map),
     (
-        "Reconstruct a new material between the first two",
+        "Reconstruct a new material between the two nearest",
         reconstruct_between,
     ),
     ("Measure what accuracy costs (a quick report)", write_report),
@@ -199,12 +200,24 @@ fn draw_map(state: &mut State) -> Result<(), Error> {
     indented(|out| map::draw(model, &args, out))
 }
 
-/// A new material at the midpoint of the first two materials' latent points.
+/// A new material at the midpoint of the two materials nearest each other
+/// on the map (a blend the model knows: far from every material it fades
+/// towards the database's mean).
 fn reconstruct_between(state: &mut State) -> Result<(), Error> {
     let model = state.model.as_ref().expect("the fit step ran");
     let latent = model.latent();
-    let x: Vec<f64> = (0..model.q())
-        .map(|c| 0.5 * (latent[(0, c)] + latent[(1, c)]))
+    let (n, q) = (latent.nrows(), model.q());
+    let d2 = |a: usize, b: usize| {
+        (0..q)
+            .map(|c| (latent[(a, c)] - latent[(b, c)]).powi(2))
+            .sum::<f64>()
+    };
+    let (a, b) = (0..n)
+        .flat_map(|a| (a + 1..n).map(move |b| (a, b)))
+        .min_by(|&(a, b), &(c, d)| d2(a, b).total_cmp(&d2(c, d)))
+        .expect("the fit needs three materials");
+    let x: Vec<f64> = (0..q)
+        .map(|c| 0.5 * (latent[(a, c)] + latent[(b, c)]))
         .collect();
     let out = state.args.dir.join(RECONSTRUCTED);
     indented(|report| {
@@ -216,7 +229,7 @@ fn reconstruct_between(state: &mut State) -> Result<(), Error> {
             report,
         )
     })?;
-    state.between = Some((model.names()[0].clone(), model.names()[1].clone()));
+    state.between = Some((model.names()[a].clone(), model.names()[b].clone()));
     Ok(())
 }
 

@@ -5,7 +5,6 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
-use brdf_atlas_core::fidelity;
 use brdf_atlas_core::{Blend, BlendRule, LOW_CONFIDENCE_VARIANCE, Model};
 use brdf_merl::Dims;
 use brdf_merl::table::HEADER_BYTES;
@@ -155,7 +154,7 @@ pub fn warn(model: &Model, x: &[f64], blend: &Blend<'_>) -> Result<(), Error> {
             c.weight_sum
         );
     }
-    if let Some((i, judged)) = fidelity::marker_at(model.file(), x) {
+    if let Some((i, judged)) = model.file().marker_at(x) {
         if !judged.gives_back() {
             eprintln!(
                 "warning: {} is {}'s marker, but the model does not give it back there: its point {}",

@@ -9,12 +9,15 @@
 //!   with Hooke-Jeeves (O(N^2) per trial through Sherman-Morrison and
 //!   determinant-lemma updates) or L-BFGS;
 //! - `model`: a [`Model`] is the fitted latent space beside its store, as a
-//!   versioned file ([`ModelFile`]) or in memory; [`fit_dir`] runs the
-//!   whole pipeline;
+//!   versioned file ([`ModelFile`]) or in memory;
+//! - `fit`: [`fit_dir`] runs the whole pipeline, from a directory of MERL
+//!   files to a model on disk whose materials are judged at their own
+//!   points ([`fidelity`]);
 //! - `query`: what a model answers: a material at a latent point
 //!   ([`Blend`]), where a new material lands ([`Located`]), albedo maps
 //!   ([`AlbedoMap`]), their contours and pictures ([`render`]);
-//! - `eval`: leave-one-out errors ([`loo`]) and map accuracy ([`measure`]);
+//! - `eval`: leave-one-out errors ([`loo`]) and how each material comes
+//!   back at its own point and left out ([`fidelity`]);
 //! - `simd`: the vectorised kernels the hot loops share (CPU features are
 //!   detected once).
 //!
@@ -34,6 +37,7 @@ mod data;
 pub mod dense;
 mod error;
 mod eval;
+mod fit;
 mod gplvm;
 pub mod heap;
 pub mod limits;
@@ -44,15 +48,16 @@ mod simd;
 
 pub use data::{Dataset, Precision, Rows, Store, StoreIdentity, TransformKind, build_store};
 pub use error::{CoreError, ParamError, Result};
-pub use eval::{fidelity, loo, measure};
+pub use eval::{fidelity, loo};
+pub use fit::{
+    DEFAULT_KERNEL, DEFAULT_TRANSFORM, FitOptions, FitReport, PAPER_KERNEL, PAPER_TRANSFORM,
+    StorePolicy, fit_dir, fit_dir_with,
+};
 pub use gplvm::optim;
 pub use gplvm::{CheckedParams, DriftStats, Fit, GplvmParams, GramData, Kernel, OptimizerKind};
-pub use model::{
-    DEFAULT_KERNEL, DEFAULT_TRANSFORM, FitOptions, FitRecord, FitReport, InputIdentity, Model,
-    ModelFile, PAPER_KERNEL, PAPER_TRANSFORM, StorePolicy, StoreRef, fit_dir, fit_dir_with,
-    store_path_for,
-};
+pub use model::{FitRecord, InputIdentity, Model, ModelFile, StoreRef, store_path_for};
 pub use progress::{NoProgress, Progress};
+pub use query::measure;
 pub use query::{
     AlbedoLattice, AlbedoMap, AlbedoMethod, Blend, BlendRule, Confidence, DEFAULT_SAMPLES,
     LATTICE_TOLERANCE, LOW_CONFIDENCE_VARIANCE, Located, Plausibility, Segment, View,

@@ -15,10 +15,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::data::{Dataset, Precision, Store, StoreIdentity, TransformKind};
 use crate::error::{CoreError, Result};
-use crate::eval::fidelity::Fidelity;
 use crate::gplvm::kernel::{Kernel, rows_of};
 use crate::gplvm::{DriftStats, Fit, GramData, OptimizerKind};
 use crate::limits::{LATENT_LIMIT, MAX_MATERIALS, MAX_Q};
+use crate::model::judged::{Fidelity, Judged, MARKER_RADIUS};
 
 /// The `format` field of every model file.
 pub const FORMAT: &str = "brdf-atlas-model";
@@ -108,6 +108,26 @@ pub struct ModelFile {
     /// it was measured.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fidelity: Option<Fidelity>,
+}
+
+impl ModelFile {
+    /// The material whose marker `x` is (the nearest within
+    /// [`MARKER_RADIUS`]) and how its own point gives it back, as the fit
+    /// recorded it (models written before it was recorded: `None`).
+    pub fn marker_at(&self, x: &[f64]) -> Option<(usize, &Judged)> {
+        let own = &self.fidelity.as_ref()?.own;
+        let d2 = |p: &[f64]| p.iter().zip(x).map(|(a, b)| (a - b) * (a - b)).sum::<f64>();
+        let (i, d) = self
+            .latent
+            .iter()
+            .map(|p| d2(p))
+            .enumerate()
+            .min_by(|a, b| a.1.total_cmp(&b.1))?;
+        if d > MARKER_RADIUS * MARKER_RADIUS {
+            return None;
+        }
+        own.get(i).map(|j| (i, j))
+    }
 }
 
 /// An input file of a fit as the fit saw it: its name in the data

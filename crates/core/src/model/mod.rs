@@ -3,8 +3,6 @@
 //! material at a latent point, maps, locating a new material).
 //!
 //! - [`file`]: the model file's format (JSON beside the store);
-//! - [`fit`]: the whole pipeline from a directory of MERL files to a model
-//!   on disk;
 //! - [`Model`]: opened from disk ([`Model::open`]) or assembled in memory
 //!   ([`Model::new`]).
 
@@ -22,16 +20,12 @@ use crate::dense::Cholesky;
 use crate::error::{CoreError, Result};
 
 pub mod file;
-pub mod fit;
+pub mod judged;
 mod recent;
 
 pub(crate) use recent::Recent;
 
 pub use file::{FitRecord, InputIdentity, ModelFile, StoreRef, store_path_for};
-pub use fit::{
-    DEFAULT_KERNEL, DEFAULT_TRANSFORM, FitOptions, FitReport, PAPER_KERNEL, PAPER_TRANSFORM,
-    StorePolicy, fit_dir, fit_dir_with,
-};
 
 /// An opened model: the file, its store mapped, `K` factorised.
 pub struct Model {
@@ -310,6 +304,7 @@ pub(crate) struct MapBasis {
 mod tests {
     use super::*;
     use crate::data::{Dataset, Precision, TransformKind};
+    use crate::fit::{FitOptions, StorePolicy, fit_dir, fit_dir_with};
     use crate::gplvm::GplvmParams;
     use crate::progress::NoProgress;
 

@@ -12,6 +12,7 @@ mod labels;
 pub mod lattice;
 pub mod locate;
 pub mod map;
+pub mod measure;
 mod overlay;
 mod paint;
 pub mod plausibility;

@@ -8,12 +8,12 @@ use std::time::{Duration, Instant};
 
 use brdf_atomic::{Swapped, stage, swap_in};
 
-use super::file::{InputIdentity, ModelFile, StoreRef, store_path_for};
 use crate::data::{Dataset, Precision, Store, TransformKind, build_store};
 use crate::error::{CoreError, Result};
 use crate::eval::fidelity::Fidelity;
 use crate::gplvm::Kernel;
 use crate::gplvm::{CheckedParams, Fit, GramData};
+use crate::model::file::{InputIdentity, ModelFile, StoreRef, store_path_for};
 use crate::progress::Progress;
 
 /// Settings of a whole fit from a directory of MERL files.
