@@ -154,15 +154,15 @@ pub fn warn(model: &Model, x: &[f64], blend: &Blend<'_>) -> Result<(), Error> {
             c.weight_sum
         );
     }
-    if let Some((i, judged)) = model.file().marker_at(x) {
-        if !judged.gives_back() {
-            eprintln!(
-                "warning: {} is {}'s marker, but the model does not give it back there: its point {}",
-                point(x),
-                model.names()[i],
-                judged.describe()
-            );
-        }
+    if let Some((i, judged)) = model.file().marker_at(x)
+        && !judged.gives_back()
+    {
+        eprintln!(
+            "warning: {} is {}'s marker, but the model does not give it back there: its point {}",
+            point(x),
+            model.names()[i],
+            judged.describe()
+        );
     }
     Ok(())
 }

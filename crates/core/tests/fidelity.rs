@@ -159,12 +159,10 @@ fn own_point_and_held_out_figures_equal_a_dense_recomputation() {
                     *g += wb * t.inverse(bin, v);
                 }
             }
-            for c in 0..3 {
-                let p = held_out_gp[i].predicted[c];
+            for (c, (&p, &g)) in held_out_gp[i].predicted.iter().zip(&got).enumerate() {
                 assert!(
-                    (p - got[c]).abs() <= 1e-6 * got[c].abs().max(1e-6),
-                    "{transform:?} {name} held out {c}: {p} vs {}",
-                    got[c]
+                    (p - g).abs() <= 1e-6 * g.abs().max(1e-6),
+                    "{transform:?} {name} held out {c}: {p} vs {g}"
                 );
             }
         }
