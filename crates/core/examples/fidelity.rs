@@ -34,7 +34,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let every = if std::env::var_os("FIDELITY_EVERY_BIN").is_some() {
         Every::BIN
     } else {
-        Every::EIGHTH
+        Every::QUARTER
     };
     let t = std::time::Instant::now();
     let f = fidelity(

@@ -135,6 +135,25 @@ fn sweep(model: &Model, points: usize, seed: u64) -> Result<(), Box<dyn std::err
         // Every point's figures from one pass over the store (the plausible
         // rule: its steps from one pass, then a pass a point).
         for (x, p) in xs.iter().zip(model.plausibilities(&xs, rule)?) {
+            if p.max_albedo > 1.0 && std::env::var_os("PLAUSIBILITY_SHOW").is_some() {
+                let b = model.at(x)?;
+                let w = b.gp_weights();
+                let mut idx: Vec<usize> = (0..w.len()).collect();
+                idx.sort_by(|&a, &c| w[c].abs().total_cmp(&w[a].abs()));
+                let top: Vec<String> = idx[..6]
+                    .iter()
+                    .map(|&i| format!("{} {:.3}", model.names()[i], w[i]))
+                    .collect();
+                println!(
+                    "  ({:.4}, {:.4}): largest directional albedo {:.3} at {} deg; sum {:.3}; {}",
+                    x[0],
+                    x[1],
+                    p.max_albedo,
+                    p.max_albedo_incidence,
+                    w.iter().sum::<f64>(),
+                    top.join(", ")
+                );
+            }
             refl.push(p.clamped_reflectance);
             vals.push(p.clamped_values);
             alb.push(p.max_albedo);

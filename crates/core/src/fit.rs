@@ -232,7 +232,7 @@ fn fit_staged(
         fit.outcome.latent.as_ref(),
         &fit.kernel,
         false,
-        crate::loo::Every::EIGHTH,
+        crate::loo::Every::QUARTER,
         progress,
     )?;
     let fidelity_time = t4.elapsed();

@@ -8,8 +8,8 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use brdf_atlas_core::{
-    Dataset, GplvmParams, GramData, NoProgress, OptimizerKind, Precision, TransformKind,
-    build_store,
+    DEFAULT_KERNEL, DEFAULT_TRANSFORM, Dataset, GplvmParams, GramData, NoProgress, OptimizerKind,
+    Precision, build_store,
 };
 use brdf_merl::Dims;
 
@@ -57,17 +57,21 @@ pub fn measure(
         let dir = work.join(format!("growth-{n}"));
         brdf_merl::synth::write_dir(&dir, n, DIMS, SEED)?;
         let data = Dataset::open_dir(&dir)?;
-        let store = dir.join("log.store");
+        let store = dir.join("default.store");
         let (_, y) = build_store(
             &data,
-            TransformKind::Log,
+            DEFAULT_TRANSFORM,
             Precision::F32,
             &store,
             &NoProgress,
         )?;
         let gram = GramData::new(y, DIMS.values())?;
         for optimizer in [OptimizerKind::HookeJeeves, OptimizerKind::Lbfgs] {
-            let params = GplvmParams::new(2).optimizer(optimizer).check()?;
+            let params = GplvmParams::new(2)
+                .length_scale(DEFAULT_KERNEL.length_scale)
+                .noise(DEFAULT_KERNEL.noise)
+                .optimizer(optimizer)
+                .check()?;
             let t = Instant::now();
             let fit = params.fit(&gram, &NoProgress)?;
             r.growth.push(GrowthRow {

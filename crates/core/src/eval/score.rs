@@ -154,10 +154,13 @@ fn score_block_portable(
                 *a += d * d;
             }
         }
-        if s.unmeasured[r] != 0 || s.grazing[bin] {
+        if s.unmeasured[r] != 0 {
             continue;
         }
-        scored += 1;
+        // Grazing bins count in the albedo (in the log spaces nothing is
+        // recovered there, on either side) but not in the table errors.
+        let grazing = s.grazing[bin];
+        scored += usize::from(!grazing);
         let (c, w) = (s.cos[bin], s.weight[bin]);
         let form = s.transform.inverse_form(bin);
         // Reflectance and cosine-weighted log of the true values.
@@ -237,6 +240,12 @@ fn score_block_portable(
             }
             let (f, lv, rv) = (&row.reflectance[..n], &row.log[..n], &row.rel[..n]);
             let (ar, al, aq, aa) = (&mut ar[..n], &mut al[..n], &mut aq[..n], &mut aa[..n]);
+            if grazing {
+                for k in 0..n {
+                    aa[k] += w * fp[k];
+                }
+                continue;
+            }
             for k in 0..n {
                 let e = fp[k] - f[k];
                 let d = lp[k] - lv[k];
