@@ -78,6 +78,24 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         nn[0],
         nn.iter().filter(|&&d| d < 0.01).count()
     );
+    // What the model knows over the map's default view: predictive
+    // variance on a 101 x 101 grid.
+    let view = brdf_atlas_core::View::default();
+    let k = 101;
+    let mut known = 0;
+    for a in 0..k {
+        for b in 0..k {
+            let x = [
+                view.x0 + (view.x1 - view.x0) * a as f64 / (k - 1) as f64,
+                view.y0 + (view.y1 - view.y0) * b as f64 / (k - 1) as f64,
+            ];
+            known += usize::from(model.at(&x)?.confidence().variance < 0.1);
+        }
+    }
+    println!(
+        "predictive variance below 0.1 on {:.1}% of the default view ({k} x {k} points)",
+        100.0 * known as f64 / (k * k) as f64
+    );
     for (i, j) in f.own.iter().enumerate() {
         if !j.gives_back() {
             println!("  {}: its point {}", model.names()[i], j.describe());

@@ -41,7 +41,7 @@ use crate::data::store::{Rows, Store};
 use crate::data::transform::{InverseForm, TransformKind};
 use crate::error::{ParamError, Result};
 use crate::progress::Progress;
-use crate::query::floor::floor_points;
+use crate::query::floor::{floor_points, floor_points_each, top_of};
 use crate::simd::fold::{GROUPS, ordered_blocks_then};
 
 /// Rows of the store per block of the LOO pass.
@@ -351,6 +351,7 @@ pub fn evaluate_some(
         zbuf: Vec<f64>,
         out: Vec<f64>,
         mixed: Vec<f64>,
+        tops: Vec<f64>,
         row: RowScratch,
     }
     // Each group's buffers (`out` is `BLOCK x` predictors `x N` values)
@@ -365,6 +366,7 @@ pub fn evaluate_some(
             zbuf: vec![0.0f64; BLOCK * n],
             out: vec![0.0f64; BLOCK * mn],
             mixed: vec![0.0f64; if mixes.is_empty() { 0 } else { BLOCK * mt }],
+            tops: vec![0.0f64; n],
             row: RowScratch {
                 truth: vec![0.0; n],
                 reflectance: vec![0.0; n],
@@ -404,6 +406,7 @@ pub fn evaluate_some(
             }
             // Bin-major rows are the columns of an n x len matrix.
             matmul(&mut g.out[..len * mn], &stacked, z, n);
+            let tops = &mut g.tops;
             let out = if mixes.is_empty() {
                 &g.out[..len * mn]
             } else {
@@ -438,7 +441,15 @@ pub fn evaluate_some(
                                 // `soft_floor`'s exp and log1p are fused
                                 // multiply-adds, a library call elsewhere.
                                 out.copy_from_slice(from);
-                                floor_points(out, towards, mean);
+                                let zr = &z[k * n..(k + 1) * n];
+                                if matches!(mix.how, Mixing::FloorOnSelf) {
+                                    floor_points(out, towards, mean, top_of(zr));
+                                } else {
+                                    // Held out: each material's cap is the
+                                    // brightest of the others'.
+                                    others_top(zr, tops);
+                                    floor_points_each(out, towards, mean, tops);
+                                }
                             }
                         }
                     }
@@ -477,6 +488,21 @@ pub fn evaluate_some(
         rows,
         albedo: (0..n).map(|i| albedo_of(&total.truth, i)).collect(),
     })
+}
+
+/// For each material, the largest of the other materials' values `z`.
+fn others_top(z: &[f64], tops: &mut [f64]) {
+    let (mut first, mut second, mut at) = (f64::NEG_INFINITY, f64::NEG_INFINITY, usize::MAX);
+    for (i, &v) in z.iter().enumerate() {
+        if v > first {
+            (second, first, at) = (first, v, i);
+        } else if v > second {
+            second = v;
+        }
+    }
+    for (i, t) in tops.iter_mut().enumerate() {
+        *t = if i == at { second } else { first };
+    }
 }
 
 /// The dense albedo rule ([`Quadrature::dense`], 2 sub-cells a bin) as a

@@ -12,7 +12,7 @@ use crate::data::transform::InverseForm;
 use crate::dense::product::matmul;
 use crate::error::{CoreError, Result};
 use crate::model::Model;
-use crate::query::floor::floor_points;
+use crate::query::floor::{floor_points, top_of};
 use crate::query::plausibility::BlendRule;
 use crate::simd::fastexp;
 use crate::simd::fold::{GROUPS, ordered_blocks};
@@ -168,7 +168,8 @@ impl Model {
                         if floor {
                             let (t, v) =
                                 (&mut s.t64[k * m..(k + 1) * m], &s.v64[k * m..(k + 1) * m]);
-                            floor_points(t, v, mu);
+                            let top = top_of(&s.z64[k * n..(k + 1) * n]);
+                            floor_points(t, v, mu, top);
                         }
                         let t = &s.t64[k * m..(k + 1) * m];
                         if rule.exponential {

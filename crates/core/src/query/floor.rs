@@ -58,52 +58,96 @@ pub fn soft_floor_with(g: f64, c: f64, s: f64, d: f64) -> f64 {
     if c > 0.0 { lifted } else { g.max(0.0) }
 }
 
-/// Every value of `t` on its soft floor, in place: row `k` has mean
-/// `mean[k]`, GP value `mean[k] + t[k]` and convex value `mean[k] + c[k]`
-/// (the map's per-pixel rule: one row a quadrature bin).
-pub(crate) fn floor_rows(t: &mut [f64], c: &[f64], mean: &[f64]) {
-    #[cfg(target_arch = "x86_64")]
-    if crate::simd::has_avx2_fma() {
-        // SAFETY: the CPU has AVX2 and FMA (checked just above).
-        return unsafe { floor_rows_fma(t, c, mean) };
-    }
-    floor_rows_portable(t, c, mean);
+/// The rule's value of a row: [`soft_floor`] of the GP value `g` and the
+/// convex value `c`, capped at `top`, the brightest material's value at
+/// the row (transformed space; every transform is increasing, so no bin of
+/// a blend reflects more than the brightest material does there). The cap
+/// changes only values the GP drives above every material, as it does
+/// where it extrapolates beyond the materials' box; it is at or above `c`,
+/// so the floor stays under it, and a material at its own point, which is
+/// at most the brightest, is left as it is.
+#[inline(always)]
+pub fn floor_capped(g: f64, c: f64, top: f64) -> f64 {
+    soft_floor(g, c).min(top)
 }
 
-/// [`floor_rows`] with one mean for every value (the exact pass: one store
-/// row at many points).
-pub(crate) fn floor_points(t: &mut [f64], c: &[f64], mean: f64) {
+/// The largest of a row's centred values: [`floor_capped`]'s `top` less the mean.
+#[inline]
+pub(crate) fn top_of(z: &[f64]) -> f64 {
+    z.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// Every value of `t` on its soft floor and under its cap, in place: row
+/// `k` has mean `mean[k]`, GP value `mean[k] + t[k]`, convex value
+/// `mean[k] + c[k]` and cap `mean[k] + top[k]` (the map's per-pixel rule:
+/// one row a quadrature bin).
+pub(crate) fn floor_rows(t: &mut [f64], c: &[f64], mean: &[f64], top: &[f64]) {
     #[cfg(target_arch = "x86_64")]
     if crate::simd::has_avx2_fma() {
         // SAFETY: the CPU has AVX2 and FMA (checked just above).
-        return unsafe { floor_points_fma(t, c, mean) };
+        return unsafe { floor_rows_fma(t, c, mean, top) };
     }
-    floor_points_portable(t, c, mean);
+    floor_rows_portable(t, c, mean, top);
+}
+
+/// [`floor_rows`] with one mean and cap for every value (the exact pass:
+/// one store row at many points).
+pub(crate) fn floor_points(t: &mut [f64], c: &[f64], mean: f64, top: f64) {
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::has_avx2_fma() {
+        // SAFETY: the CPU has AVX2 and FMA (checked just above).
+        return unsafe { floor_points_fma(t, c, mean, top) };
+    }
+    floor_points_portable(t, c, mean, top);
+}
+
+/// [`floor_points`] with a cap for each value (leave-one-out: each
+/// material's cap is the brightest of the others').
+pub(crate) fn floor_points_each(t: &mut [f64], c: &[f64], mean: f64, top: &[f64]) {
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::has_avx2_fma() {
+        // SAFETY: the CPU has AVX2 and FMA (checked just above).
+        return unsafe { floor_points_each_fma(t, c, mean, top) };
+    }
+    floor_points_each_portable(t, c, mean, top);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn floor_rows_fma(t: &mut [f64], c: &[f64], mean: &[f64]) {
-    floor_rows_portable(t, c, mean);
+fn floor_points_each_fma(t: &mut [f64], c: &[f64], mean: f64, top: &[f64]) {
+    floor_points_each_portable(t, c, mean, top);
+}
+
+#[inline(always)]
+fn floor_points_each_portable(t: &mut [f64], c: &[f64], m: f64, top: &[f64]) {
+    for ((t, &c), &u) in t.iter_mut().zip(c).zip(top) {
+        *t = floor_capped(m + *t, m + c, m + u) - m;
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn floor_points_fma(t: &mut [f64], c: &[f64], mean: f64) {
-    floor_points_portable(t, c, mean);
+fn floor_rows_fma(t: &mut [f64], c: &[f64], mean: &[f64], top: &[f64]) {
+    floor_rows_portable(t, c, mean, top);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn floor_points_fma(t: &mut [f64], c: &[f64], mean: f64, top: f64) {
+    floor_points_portable(t, c, mean, top);
 }
 
 #[inline(always)]
-fn floor_rows_portable(t: &mut [f64], c: &[f64], mean: &[f64]) {
-    for ((t, &c), &m) in t.iter_mut().zip(c).zip(mean) {
-        *t = soft_floor(m + *t, m + c) - m;
+fn floor_rows_portable(t: &mut [f64], c: &[f64], mean: &[f64], top: &[f64]) {
+    for (((t, &c), &m), &u) in t.iter_mut().zip(c).zip(mean).zip(top) {
+        *t = floor_capped(m + *t, m + c, m + u) - m;
     }
 }
 
 #[inline(always)]
-fn floor_points_portable(t: &mut [f64], c: &[f64], m: f64) {
+fn floor_points_portable(t: &mut [f64], c: &[f64], m: f64, top: f64) {
     for (t, &c) in t.iter_mut().zip(c) {
-        *t = soft_floor(m + *t, m + c) - m;
+        *t = floor_capped(m + *t, m + c, m + top) - m;
     }
 }
 
@@ -168,6 +212,22 @@ mod tests {
             }
             prev_slope = slope;
         }
+    }
+
+    #[test]
+    fn the_cap_changes_only_values_above_the_brightest_material() {
+        let (c, top) = (0.8, 2.0);
+        for k in -100..=300 {
+            let g = k as f64 / 50.0;
+            let y = floor_capped(g, c, top);
+            assert!(y <= top && y >= FLOOR_SHARE * c, "{g}: {y}");
+            if soft_floor(g, c) <= top {
+                assert_eq!(y, soft_floor(g, c));
+            } else {
+                assert_eq!(y, top);
+            }
+        }
+        assert_eq!(top_of(&[0.1, -3.0, 0.7, 0.2]), 0.7);
     }
 
     #[test]

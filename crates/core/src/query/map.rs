@@ -322,6 +322,7 @@ impl Model {
                     c,
                     cv,
                     mean,
+                    top,
                     ..
                 } = &*rule;
                 let r = rows.rows.len();
@@ -349,7 +350,7 @@ impl Model {
                             let mut cbuf = vec![0.0f64; r * width];
                             matmul(&mut cbuf, cv, &vx, n);
                             for (col, cvals) in vbuf.chunks_exact_mut(r).zip(cbuf.chunks_exact(r)) {
-                                floor_rows(col, cvals, mean);
+                                floor_rows(col, cvals, mean, top);
                             }
                         }
                         let mut terms = vec![0.0f64; r];
@@ -424,6 +425,9 @@ pub(crate) struct PixelRule {
     /// `mean + Z_q^T v`.
     cv: Vec<f64>,
     mean: Vec<f64>,
+    /// The largest centred value of each rule row (the soft floor's cap,
+    /// [`crate::query::floor::floor_capped`]).
+    top: Vec<f64>,
 }
 
 /// Per-pixel rules a model keeps, one a sample count: a viewer asking for
@@ -465,6 +469,9 @@ impl Model {
             .map(|(i, j)| zq[(i, j)])
             .collect();
         let mean: Vec<f64> = rows.rows.iter().map(|&row| store.mean()[row]).collect();
+        let top: Vec<f64> = (0..r)
+            .map(|j| (0..n).map(|i| zq[(i, j)]).fold(f64::NEG_INFINITY, f64::max))
+            .collect();
         let rule = Arc::new(PixelRule {
             samples,
             bins: quadrature.len(),
@@ -473,6 +480,7 @@ impl Model {
             c,
             cv,
             mean,
+            top,
         });
         cache.keep(rule.clone(), PIXEL_RULE_CACHE, same, |_| false);
         rule

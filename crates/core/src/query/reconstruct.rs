@@ -31,7 +31,7 @@ use rayon::prelude::*;
 use crate::data::store::Rows;
 use crate::error::Result;
 use crate::model::Model;
-use crate::query::floor::soft_floor;
+use crate::query::floor::floor_capped;
 use crate::simd::dot;
 
 /// One latent point of a model, ready to answer queries.
@@ -274,7 +274,7 @@ impl<'m> Blend<'m> {
         };
         let g = blend(self.weights_of_row(row, self.model.dims().bins()));
         match &self.floor {
-            Some(v) => soft_floor(g, blend(v)),
+            Some(v) => floor_capped(g, blend(v), store.mean()[row] + row_top(store, row)),
             None => g,
         }
     }
@@ -294,8 +294,8 @@ impl<'m> Blend<'m> {
                     Rows::F32(z) => dot::rows(v, &z[r * n..], mean, c),
                     Rows::F64(z) => dot::rows(v, &z[r * n..], mean, c),
                 }
-                for (o, &c) in out.iter_mut().zip(c.iter()) {
-                    *o = soft_floor(*o, c);
+                for (k, (o, &c)) in out.iter_mut().zip(c.iter()).enumerate() {
+                    *o = floor_capped(*o, c, mean[k] + row_top(store, r + k));
                 }
             }
         }
@@ -434,5 +434,17 @@ impl<'m> Blend<'m> {
             );
         self.model.verify()?;
         Ok(MerlTable::from_raw(dims, values).expect("length matches dims"))
+    }
+}
+
+/// The largest centred value of store row `row` over the materials (the
+/// soft floor's cap less the mean, [`floor_capped`]).
+fn row_top(store: &crate::data::Store, row: usize) -> f64 {
+    let n = store.n();
+    match store.z() {
+        Rows::F32(z) => z[row * n..(row + 1) * n]
+            .iter()
+            .fold(f64::NEG_INFINITY, |a, &b| a.max(f64::from(b))),
+        Rows::F64(z) => crate::query::floor::top_of(&z[row * n..(row + 1) * n]),
     }
 }

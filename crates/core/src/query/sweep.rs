@@ -14,7 +14,7 @@ use crate::dense::product::matmul;
 use crate::error::Result;
 use crate::model::Model;
 use crate::query::exact::floor_of;
-use crate::query::floor::floor_points;
+use crate::query::floor::{floor_points, top_of};
 use crate::query::plausibility::{BlendRule, ClampSums, Plausibility};
 use crate::simd::fold::{GROUPS, ordered_blocks};
 
@@ -77,7 +77,8 @@ impl Model {
                     let (mu, bin) = (mean[row], row % bins);
                     let t = &mut t[k * m..(k + 1) * m];
                     if floor {
-                        floor_points(t, &v[k * m..(k + 1) * m], mu);
+                        let top = top_of(&z[k * n..(k + 1) * n]);
+                        floor_points(t, &v[k * m..(k + 1) * m], mu, top);
                     }
                     let (c, form) = (cosines[bin], transform.inverse_form(bin));
                     for (s, &t) in acc.iter_mut().zip(t.iter()) {
