@@ -6,6 +6,7 @@ use std::process::ExitCode;
 
 use brdf_atlas_core::Located;
 use brdf_atlas_core::Model;
+use brdf_atlas_core::fidelity::{self, Judged};
 use brdf_merl::MerlFile;
 
 use crate::error::Error;
@@ -30,23 +31,47 @@ pub struct Args {
     pub files: Vec<PathBuf>,
 }
 
-/// Locate one MERL file in `model`.
-pub fn locate(model: &Model, path: &Path) -> Result<Located, Error> {
+/// Where a file landed, and how the model's material there compares with it.
+pub struct Found {
+    /// The point and the search's figures.
+    pub located: Located,
+    /// The file against the model's material at the point.
+    pub there: Judged,
+    /// The file against the nearest of the model's materials (at its own
+    /// point, where the model gives it back).
+    pub nearest: Judged,
+}
+
+/// Locate one MERL file in `model`, and judge the material at its point.
+pub fn locate(model: &Model, path: &Path) -> Result<Found, Error> {
     if path.is_dir() {
         return Err(Error::IsDirectory {
             path: path.to_path_buf(),
         });
     }
-    Ok(model.locate(&MerlFile::open(path)?)?)
+    let file = MerlFile::open(path)?;
+    let located = model.locate(&file)?;
+    let truth = file.to_table();
+    let there = fidelity::judge_at(model, &located.point, &truth)?;
+    let &(i, _) = located.nearest.first().expect("a model has materials");
+    let xi: Vec<f64> = (0..model.q()).map(|c| model.latent()[(i, c)]).collect();
+    let nearest = fidelity::judge_at(model, &xi, &truth)?;
+    Ok(Found {
+        located,
+        there,
+        nearest,
+    })
 }
 
-/// One file's report: point, error against scale, nearest inputs.
+/// One file's report: point, error against scale, how the material there
+/// compares with the file, nearest inputs.
 pub fn write_located(
     out: &mut impl Write,
     model: &Model,
     path: &Path,
-    l: &Located,
+    found: &Found,
 ) -> io::Result<()> {
+    let l = &found.located;
     writeln!(out, "{}: at {}", path.display(), point(&l.point))?;
     writeln!(
         out,
@@ -62,6 +87,27 @@ pub fn write_located(
         .map(|&(i, d)| format!("{} ({d:.4})", model.names()[i]))
         .collect();
     writeln!(out, "  nearest  {}", nearest.join(", "))?;
+    let e = found.there.albedo_errors();
+    writeln!(
+        out,
+        "  there    albedo off by {:.1}%, {:.1}%, {:.1}% (r, g, b); log-relative table error {:.3} (ln(1 + v) RMSE {:.4})",
+        100.0 * e[0],
+        100.0 * e[1],
+        100.0 * e[2],
+        found.there.log_rel,
+        found.there.log
+    )?;
+    let e = found.nearest.albedo_errors();
+    writeln!(
+        out,
+        "           the nearest material, {}: {:.1}%, {:.1}%, {:.1}%; {:.3} ({:.4})",
+        model.names()[l.nearest[0].0],
+        100.0 * e[0],
+        100.0 * e[1],
+        100.0 * e[2],
+        found.nearest.log_rel,
+        found.nearest.log
+    )?;
     if !l.in_default_view() {
         let [x, y] = [l.point[0], l.point[1]];
         let w = 0.1 + x.abs().max(y.abs()).max(1.0);

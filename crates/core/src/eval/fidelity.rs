@@ -20,6 +20,8 @@
 //! - **leave-one-out**: the same rule with `i` left out of both blends
 //!   (the GP's closed form `z_i - (K^-1 z)_i / (K^-1)_ii`, no refit).
 
+use brdf_merl::MerlTable;
+use brdf_merl::albedo::Quadrature;
 use faer::{Mat, MatRef};
 
 use crate::data::store::Store;
@@ -125,4 +127,46 @@ fn judge(ev: &Evaluation, m: usize) -> Vec<Judged> {
             log: e.log_rmse(i, ev.scored_rows),
         })
         .collect()
+}
+
+/// The material `truth` (a MERL table of the model's dims, such as a file
+/// [`crate::Model::locate`] placed at `x`) judged against the model's
+/// material at `x` by the default rule: relative albedo per channel (the
+/// dense rule over both full tables) and the table errors over the bins
+/// measured in `truth` that are not grazing.
+pub fn judge_at(model: &crate::Model, x: &[f64], truth: &MerlTable) -> Result<Judged> {
+    let table = model.at_with(x, crate::BlendRule::Floor)?.table()?;
+    Ok(judge_tables(model.albedo_rule(), truth, &table))
+}
+
+/// `got` judged against `truth` (tables of the same dims) with the albedo `rule`.
+pub fn judge_tables(rule: &Quadrature, truth: &MerlTable, got: &MerlTable) -> Judged {
+    let dims = truth.dims();
+    let (mut log_rel, mut log, mut count) = (0.0, 0.0, 0usize);
+    for bin in 0..dims.bins() {
+        let (ci, co) = dims.angles_of(bin).cosines();
+        let c = (ci * co).max(0.0);
+        if c < 1e-6 {
+            continue;
+        }
+        for ch in 0..3 {
+            let Some(t) = truth.value(ch, bin) else {
+                continue;
+            };
+            let g = got.value(ch, bin).unwrap_or(0.0);
+            let (v, w) = (t.max(0.0) * c, g.max(0.0) * c);
+            let q = ((w + LOG_REL_OFFSET) / (v + LOG_REL_OFFSET)).ln();
+            let d = w.ln_1p() - v.ln_1p();
+            log_rel += q * q;
+            log += d * d;
+            count += 1;
+        }
+    }
+    let rms = |s: f64| (s / count.max(1) as f64).sqrt();
+    Judged {
+        albedo: rule.albedo(truth),
+        predicted: rule.albedo(got),
+        log_rel: rms(log_rel),
+        log: rms(log),
+    }
 }
