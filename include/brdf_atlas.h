@@ -91,6 +91,18 @@
 #define BRDF_ATLAS_LOW_CONFIDENCE_VARIANCE 0.5
 
 /**
+ * A material's own point gives it back when every channel of its albedo
+ * there is within this share of its own (`brdf_atlas_model_marker`).
+ */
+#define BRDF_ATLAS_GIVES_BACK 0.05
+
+/**
+ * A latent point within this distance of a material's point is its marker
+ * (`brdf_atlas_model_marker`).
+ */
+#define BRDF_ATLAS_MARKER_RADIUS 0.01
+
+/**
  * The largest quadrature sample count a map accepts (2^24): more would only
  * take hours.
  */
@@ -696,6 +708,36 @@ enum BrdfAtlasStatus brdf_atlas_model_confidence(const struct BrdfAtlasModel *mo
                                                  double y,
                                                  double *variance,
                                                  double *weight_sum);
+
+/**
+ * Whether latent point (x, y) is a material's marker (within
+ * `BRDF_ATLAS_MARKER_RADIUS` of its point), and how the model gives that
+ * material back there, as its fit measured it: the largest relative
+ * albedo error of the three channels, and the ratio of the model's albedo
+ * to the material's in that channel (7.2 for black fabric under the
+ * paper's settings, about 1 for a material given back). A material whose
+ * error exceeds `BRDF_ATLAS_GIVES_BACK` is not given back: say so to the
+ * user. No pass over the store.
+ *
+ * Ownership: `model` is borrowed; `material`, `albedo_error` and
+ * `albedo_ratio` are caller-owned (each may be NULL). On success
+ * `material` is the material's index, or SIZE_MAX where (x, y) is no
+ * marker or the model file records no figures (written before they were
+ * measured); the figures are then NaN.
+ *
+ * Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (x or y NaN or infinite),
+ * UNSUPPORTED (the model is not 2-D).
+ *
+ * # Safety
+ * `model` is NULL or a live handle; the out-pointers are NULL or valid for
+ * writing.
+ */
+enum BrdfAtlasStatus brdf_atlas_model_marker(const struct BrdfAtlasModel *model,
+                                             double x,
+                                             double y,
+                                             size_t *material,
+                                             double *albedo_error,
+                                             double *albedo_ratio);
 
 /**
  * Reconstruct the whole table at latent point (x, y) under blend rule

@@ -269,6 +269,32 @@ public:
         return v;
     }
 
+    /// A material's marker at (x, y) and how the model gives it back there
+    /// (brdf_atlas_model_marker).
+    struct Marker {
+        /// The material's index; SIZE_MAX where (x, y) is no marker (or the
+        /// model records no figures).
+        std::size_t material;
+        /// The largest relative albedo error of the three channels.
+        double albedo_error;
+        /// The model's albedo over the material's in that channel.
+        double albedo_ratio;
+        /// Whether (x, y) is a marker whose material the model gives back
+        /// (albedo within BRDF_ATLAS_GIVES_BACK in every channel).
+        bool given_back() const {
+            return material != SIZE_MAX && albedo_error <= BRDF_ATLAS_GIVES_BACK;
+        }
+    };
+
+    /// Whether (x, y) is a material's marker, and how the model gives the
+    /// material back there (no pass over the store).
+    Marker marker(double x, double y) const {
+        Marker m{SIZE_MAX, 0, 0};
+        check(brdf_atlas_model_marker(handle_, x, y, &m.material, &m.albedo_error,
+                                      &m.albedo_ratio));
+        return m;
+    }
+
     /// How physical the material at (x, y) is under blend rule `blend`
     /// (BRDF_ATLAS_BLEND_FLOOR: the table reconstruct() gives) and what the
     /// model knows there. Reads the whole store once, as reconstruct() does.

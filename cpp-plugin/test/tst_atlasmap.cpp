@@ -381,6 +381,29 @@ private slots:
                  qPrintable(text));
     }
 
+    void markerWords() {
+        // A marker the model does not give back, one it does, and no marker.
+        using Marker = brdf_atlas::Model::Marker;
+        QCOMPARE(atlasMarkerText("black-fabric", Marker{3, 6.2, 7.2}),
+                 QStringLiteral("Not black-fabric: the model gives back 7.2x its albedo at its "
+                                "marker (worst channel, 620% off)."));
+        QCOMPARE(atlasMarkerText("alumina-oxide", Marker{0, 0.29, 0.71}),
+                 QStringLiteral("Not alumina-oxide: the model gives back 0.71x its albedo at its "
+                                "marker (worst channel, 29% off)."));
+        QVERIFY(atlasMarkerText("gold", Marker{1, 0.004, 1.004}).isEmpty());
+        QVERIFY(atlasMarkerText("-", Marker{SIZE_MAX, 0, 0}).isEmpty());
+        // The library's own answer at each material of the test's model: the
+        // default fit gives every one back.
+        std::shared_ptr<const brdf_atlas::Model> model = panel_->mapView()->model();
+        QVERIFY(model);
+        for (std::size_t i = 0; i < model->material_count(); ++i) {
+            const auto p = model->latent_point(i);
+            const Marker m = model->marker(p[0], p[1]);
+            QCOMPARE(m.material, i);
+            QVERIFY2(m.given_back(), qPrintable(QString::number(m.albedo_error)));
+        }
+    }
+
     void screenshot() {
         const QString dir = qEnvironmentVariable("BRDF_ATLAS_ARTEFACTS", ".");
         QDir().mkpath(dir);

@@ -178,9 +178,14 @@ void AtlasPanel::sayConfidence() {
     const QPointF m = view_->marker();
     try {
         const double v = model->variance(m.x(), m.y());  // no pass over the store
+        const brdf_atlas::Model::Marker marker = model->marker(m.x(), m.y());  // nor here
         status_->setStyleSheet(QString());
         if (v > BRDF_ATLAS_LOW_CONFIDENCE_VARIANCE) {
             status_->setText(atlasLowConfidenceText(v));
+        } else if (!marker.given_back() && marker.material != SIZE_MAX) {
+            status_->setStyleSheet(atlasErrorStyle());
+            status_->setText(
+                atlasMarkerText(view_->materialNames()[int(marker.material)], marker));
         } else {
             status_->setText(QStringLiteral("Click the map, then Validate."));
         }

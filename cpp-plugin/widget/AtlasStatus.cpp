@@ -80,6 +80,15 @@ QString atlasPlausibilityText(const brdf_atlas::Plausibility &p) {
     return text;
 }
 
+QString atlasMarkerText(const QString &name, const brdf_atlas::Model::Marker &marker) {
+    if (marker.material == SIZE_MAX || marker.given_back()) return QString();
+    const double r = marker.albedo_ratio;
+    const QString ratio = QString::number(r, 'f', r >= 10 ? 0 : (r >= 1 ? 1 : 2));
+    return QStringLiteral("Not %1: the model gives back %2x its albedo at its marker (worst "
+                          "channel, %3 off).")
+        .arg(name, ratio, atlasPercentText(marker.albedo_error));
+}
+
 QString atlasPlausibilityStyle(const brdf_atlas::Plausibility &p) {
     return p.plausible ? QString() : atlasErrorStyle();
 }

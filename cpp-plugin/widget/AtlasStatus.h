@@ -33,6 +33,13 @@ QString atlasLowConfidenceText(double variance);
 /// knows little there, with the predictive variance.
 QString atlasPlausibilityText(const brdf_atlas::Plausibility &p);
 
+/// Where (x, y) is the marker of material `name` that the model does not
+/// give back (`marker`, brdf_atlas::Model::marker): a sentence saying so,
+/// with the model's albedo there over the material's ("Not black-fabric:
+/// the model gives back 7.2x its albedo at its marker (worst channel)").
+/// Empty where the point is no marker or the material is given back.
+QString atlasMarkerText(const QString &name, const brdf_atlas::Model::Marker &marker);
+
 /// The colour a label shows `p` in: empty (the palette's) when plausible,
 /// the panel's error red when not.
 QString atlasPlausibilityStyle(const brdf_atlas::Plausibility &p);

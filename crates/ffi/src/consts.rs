@@ -41,6 +41,14 @@ pub const BRDF_ATLAS_DEFAULT_VIEW_HALF_WIDTH: f64 = 1.1;
 /// less than half of what the material there could be.
 pub const BRDF_ATLAS_LOW_CONFIDENCE_VARIANCE: f64 = 0.5;
 
+/// A material's own point gives it back when every channel of its albedo
+/// there is within this share of its own (`brdf_atlas_model_marker`).
+pub const BRDF_ATLAS_GIVES_BACK: f64 = 0.05;
+
+/// A latent point within this distance of a material's point is its marker
+/// (`brdf_atlas_model_marker`).
+pub const BRDF_ATLAS_MARKER_RADIUS: f64 = 0.01;
+
 /// The largest quadrature sample count a map accepts (2^24): more would only
 /// take hours.
 pub const BRDF_ATLAS_MAX_SAMPLES: usize = 1 << 24;
@@ -78,4 +86,6 @@ const _: () = {
     assert!(BRDF_ATLAS_MAX_MAP_SIDE == limits::MAX_MAP_SIDE);
     assert!(BRDF_ATLAS_DEFAULT_VIEW_HALF_WIDTH == limits::DEFAULT_VIEW_HALF_WIDTH);
     assert!(BRDF_ATLAS_LOW_CONFIDENCE_VARIANCE == brdf_atlas_core::LOW_CONFIDENCE_VARIANCE);
+    assert!(BRDF_ATLAS_GIVES_BACK == brdf_atlas_core::fidelity::GIVES_BACK);
+    assert!(BRDF_ATLAS_MARKER_RADIUS == brdf_atlas_core::fidelity::MARKER_RADIUS);
 };

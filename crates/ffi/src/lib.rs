@@ -51,10 +51,10 @@ pub mod query;
 pub mod status;
 
 pub use consts::{
-    BRDF_ATLAS_DEFAULT_VIEW_HALF_WIDTH, BRDF_ATLAS_LATENT_LIMIT,
-    BRDF_ATLAS_LOW_CONFIDENCE_VARIANCE, BRDF_ATLAS_MAX_MAP_SIDE, BRDF_ATLAS_MAX_MATERIALS,
-    BRDF_ATLAS_MAX_Q, BRDF_ATLAS_MAX_SAMPLES, BRDF_ATLAS_VERSION_MAJOR, BRDF_ATLAS_VERSION_MINOR,
-    BRDF_ATLAS_VERSION_PATCH,
+    BRDF_ATLAS_DEFAULT_VIEW_HALF_WIDTH, BRDF_ATLAS_GIVES_BACK, BRDF_ATLAS_LATENT_LIMIT,
+    BRDF_ATLAS_LOW_CONFIDENCE_VARIANCE, BRDF_ATLAS_MARKER_RADIUS, BRDF_ATLAS_MAX_MAP_SIDE,
+    BRDF_ATLAS_MAX_MATERIALS, BRDF_ATLAS_MAX_Q, BRDF_ATLAS_MAX_SAMPLES, BRDF_ATLAS_VERSION_MAJOR,
+    BRDF_ATLAS_VERSION_MINOR, BRDF_ATLAS_VERSION_PATCH,
 };
 pub use contour::{BrdfAtlasSegment, brdf_atlas_contour_levels, brdf_atlas_contours};
 pub use map::{
@@ -69,7 +69,8 @@ pub use model::{
 };
 pub use plausibility::{
     BRDF_ATLAS_BLEND_FLOOR, BRDF_ATLAS_BLEND_GP, BRDF_ATLAS_BLEND_PLAUSIBLE, BrdfAtlasPlausibility,
-    brdf_atlas_model_confidence, brdf_atlas_model_plausibility, brdf_atlas_model_reconstruct_with,
+    brdf_atlas_model_confidence, brdf_atlas_model_marker, brdf_atlas_model_plausibility,
+    brdf_atlas_model_reconstruct_with,
 };
 pub use query::{
     BrdfAtlasLocation, brdf_atlas_model_eval, brdf_atlas_model_eval_batch, brdf_atlas_model_locate,

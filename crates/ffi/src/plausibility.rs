@@ -139,6 +139,60 @@ pub unsafe extern "C" fn brdf_atlas_model_confidence(
     })
 }
 
+/// Whether latent point (x, y) is a material's marker (within
+/// `BRDF_ATLAS_MARKER_RADIUS` of its point), and how the model gives that
+/// material back there, as its fit measured it: the largest relative
+/// albedo error of the three channels, and the ratio of the model's albedo
+/// to the material's in that channel (7.2 for black fabric under the
+/// paper's settings, about 1 for a material given back). A material whose
+/// error exceeds `BRDF_ATLAS_GIVES_BACK` is not given back: say so to the
+/// user. No pass over the store.
+///
+/// Ownership: `model` is borrowed; `material`, `albedo_error` and
+/// `albedo_ratio` are caller-owned (each may be NULL). On success
+/// `material` is the material's index, or SIZE_MAX where (x, y) is no
+/// marker or the model file records no figures (written before they were
+/// measured); the figures are then NaN.
+///
+/// Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (x or y NaN or infinite),
+/// UNSUPPORTED (the model is not 2-D).
+///
+/// # Safety
+/// `model` is NULL or a live handle; the out-pointers are NULL or valid for
+/// writing.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn brdf_atlas_model_marker(
+    model: *const BrdfAtlasModel,
+    x: f64,
+    y: f64,
+    material: *mut usize,
+    albedo_error: *mut f64,
+    albedo_ratio: *mut f64,
+) -> BrdfAtlasStatus {
+    run("brdf_atlas_model_marker", || {
+        let m = unsafe { handle::borrow(model) }?;
+        let material = unsafe { check::optional_out(material, "material") }?;
+        let albedo_error = unsafe { check::optional_out(albedo_error, "albedo_error") }?;
+        let albedo_ratio = unsafe { check::optional_out(albedo_ratio, "albedo_ratio") }?;
+        let p = check::point(m, x, y)?;
+        let found = m.file().marker_at(&p);
+        let (i, e, r) = match found {
+            Some((i, j)) => (i, j.albedo_error(), j.worst_ratio()),
+            None => (usize::MAX, f64::NAN, f64::NAN),
+        };
+        if let Some(o) = material {
+            *o = i;
+        }
+        if let Some(o) = albedo_error {
+            *o = e;
+        }
+        if let Some(o) = albedo_ratio {
+            *o = r;
+        }
+        Ok(())
+    })
+}
+
 /// Reconstruct the whole table at latent point (x, y) under blend rule
 /// `blend`, as `brdf_atlas_model_reconstruct` does (same layout, units and
 /// buffer rules); `BRDF_ATLAS_BLEND_FLOOR` (the default) gives the same bits

@@ -230,3 +230,52 @@ fn a_cancellable_map_is_the_map_or_nothing() {
     assert_eq!(s, BrdfAtlasStatus::NullArgument);
     assert!(last_error().contains("cancel"), "{}", last_error());
 }
+
+#[test]
+fn a_marker_reports_how_its_material_comes_back() {
+    // The paper's kernel on five materials: markers the fit recorded, each
+    // with the figures the model file holds (checked against an independent
+    // reconstruction in the core's tests).
+    let tmp = tempfile::tempdir().unwrap();
+    let path = fit(tmp.path(), 2, TransformKind::Log);
+    let h = Handle::open(&path);
+    let m = Model::open(&path).unwrap();
+    let own = &m
+        .file()
+        .fidelity
+        .as_ref()
+        .expect("fit records the own points")
+        .own;
+    for (i, judged) in own.iter().enumerate() {
+        let (x, y) = (m.latent()[(i, 0)], m.latent()[(i, 1)]);
+        for (dx, hit) in [
+            (0.0, true),
+            (0.5 * BRDF_ATLAS_MARKER_RADIUS, true),
+            (0.3, false),
+        ] {
+            let (mut index, mut error, mut ratio) = (0usize, 0.0, 0.0);
+            let s = unsafe {
+                brdf_atlas_model_marker(h.0, x + dx, y, &mut index, &mut error, &mut ratio)
+            };
+            assert_eq!(s, BrdfAtlasStatus::Ok, "{}", last_error());
+            // 0.3 away from a material may be another's marker: only the
+            // hits are checked for who they are.
+            if hit {
+                assert_eq!(index, i);
+                assert_eq!(error, judged.albedo_error());
+                assert_eq!(ratio, judged.worst_ratio());
+            } else if index == usize::MAX {
+                assert!(error.is_nan() && ratio.is_nan());
+            }
+        }
+    }
+    // Every out-pointer may be NULL; a non-finite point is refused.
+    let s = unsafe { brdf_atlas_model_marker(h.0, 0.0, 0.0, null_mut(), null_mut(), null_mut()) };
+    assert_eq!(s, BrdfAtlasStatus::Ok);
+    let s =
+        unsafe { brdf_atlas_model_marker(h.0, f64::NAN, 0.0, null_mut(), null_mut(), null_mut()) };
+    assert_eq!(s, BrdfAtlasStatus::InvalidArgument);
+    let s =
+        unsafe { brdf_atlas_model_marker(null(), 0.0, 0.0, null_mut(), null_mut(), null_mut()) };
+    assert_eq!(s, BrdfAtlasStatus::NullArgument);
+}
