@@ -192,9 +192,7 @@ fn fit_rejects_bad_parameters() {
 
 #[test]
 fn reconstruct_writes_a_merl_file_of_the_model_dims() {
-    // The paper's wide kernel knows all of the view of six materials, so
-    // the only warning is the dims'.
-    let fx = Fixture::new(6, &["--paper"]);
+    let fx = Fixture::new(6, &[]);
     let out_path = fx.path("new.binary");
     let out = brdf_atlas([
         Path::new("reconstruct"),

@@ -74,7 +74,7 @@ def fit(
     transform: Literal["rel-log", "log", "raw"] = "rel-log",
     optimizer: Literal["hooke-jeeves", "lbfgs"] = "lbfgs",
     store_precision: Literal["f32", "f64"] = "f32",
-    length_scale: float = 0.3,
+    length_scale: float | None = None,
     noise: float = 3e-5,
     min_step: float = 1e-3,
     progress: Optional[Callable[[str, int, int], object]] = None,

@@ -7,6 +7,7 @@ use std::time::{Duration, Instant};
 
 use brdf_atlas_core::limits::MAX_Q;
 use brdf_atlas_core::{
+    default_kernel,
     Dataset, FitOptions, GplvmParams, OptimizerKind, Precision, Progress, TransformKind, fit_dir,
     store_path_for,
 };
@@ -125,7 +126,7 @@ fn choice<T>(value: &str, option: &str, parse: fn(&str) -> Option<T>, names: &st
 /// optimise, save).
 #[pyfunction]
 #[pyo3(signature = (merl_dir, out, *, q = 2, transform = "rel-log", optimizer = "lbfgs",
-                    store_precision = "f32", length_scale = 0.3, noise = 3e-5, min_step = 1e-3,
+                    store_precision = "f32", length_scale = None, noise = 3e-5, min_step = 1e-3,
                     progress = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit<'py>(
@@ -136,7 +137,7 @@ pub fn fit<'py>(
     transform: &str,
     optimizer: &str,
     store_precision: &str,
-    length_scale: f64,
+    length_scale: Option<f64>,
     noise: f64,
     min_step: f64,
     progress: Option<Py<PyAny>>,
@@ -159,6 +160,10 @@ pub fn fit<'py>(
         Precision::parse,
         "\"f32\" or \"f64\"",
     )?;
+    // The default length scale depends on how many materials there are
+    // (`default_kernel`): the directory's listing says.
+    let length_scale = length_scale
+        .unwrap_or_else(|| default_kernel(count_binaries(&merl_dir).unwrap_or(0)).length_scale);
     let params = GplvmParams::new(q)
         .length_scale(length_scale)
         .noise(noise)

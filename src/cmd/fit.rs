@@ -8,10 +8,12 @@ use std::process::ExitCode;
 use brdf_atlas_core::fidelity::{Fidelity, GIVES_BACK, Summary};
 use brdf_atlas_core::limits::MAX_Q;
 use brdf_atlas_core::{
-    DEFAULT_KERNEL, DEFAULT_TRANSFORM, Dataset, GplvmParams, Kernel, OptimizerKind, PAPER_KERNEL,
-    PAPER_TRANSFORM, Store, TransformKind,
+    DEFAULT_TRANSFORM, Dataset, GplvmParams, Kernel, OptimizerKind, PAPER_KERNEL, PAPER_TRANSFORM,
+    Store, TransformKind,
 };
-use brdf_atlas_core::{FitOptions, FitReport, StorePolicy, fit_dir_with, store_path_for};
+use brdf_atlas_core::{
+    FitOptions, FitReport, StorePolicy, default_kernel, fit_dir_with, store_path_for,
+};
 
 use crate::args::{OptimizerArg, PrecisionArg, TransformArg};
 use crate::error::Error;
@@ -58,7 +60,8 @@ pub struct Args {
     /// Precision of the stored data (sums are always in f64).
     #[arg(long, value_enum, default_value_t = PrecisionArg::F32)]
     pub store_precision: PrecisionArg,
-    /// RBF kernel length scale [default: 0.3; 1 with --paper].
+    /// RBF kernel length scale [default: 3 / sqrt(materials) within [0.3, 1]
+    /// (0.3 for 100 materials); 1 with --paper].
     #[arg(long, allow_negative_numbers = true)]
     pub length_scale: Option<f64>,
     /// Noise added to the kernel diagonal [default: 3e-5; 1e-4 with --paper].
@@ -109,12 +112,13 @@ impl Args {
         }
     }
 
-    /// The kernel: each value as given, else the paper's with `--paper`, else the default.
-    pub fn kernel(&self) -> Kernel {
+    /// The kernel for `materials` materials: each value as given, else the
+    /// paper's with `--paper`, else the default ([`default_kernel`]).
+    pub fn kernel(&self, materials: usize) -> Kernel {
         let base = if self.paper {
             PAPER_KERNEL
         } else {
-            DEFAULT_KERNEL
+            default_kernel(materials)
         };
         Kernel {
             length_scale: self.length_scale.unwrap_or(base.length_scale),
@@ -146,7 +150,10 @@ pub struct Fitted {
 /// after writing a new store removes it again, so a failed run leaves no
 /// store without a model.
 pub fn fit(args: &Args) -> Result<Fitted, Error> {
-    let kernel = args.kernel();
+    // The default kernel depends on how many materials there are: the
+    // directory's listing says, before any file is read.
+    let n = count_binaries(&args.dir).unwrap_or(0);
+    let kernel = args.kernel(n);
     let params = GplvmParams::new(args.q)
         .length_scale(kernel.length_scale)
         .noise(kernel.noise)
@@ -154,7 +161,6 @@ pub fn fit(args: &Args) -> Result<Fitted, Error> {
         .learn_kernel(args.learn_kernel)
         .min_step(args.min_step)
         .check()?;
-    let n = count_binaries(&args.dir).unwrap_or(0);
     if n > 0 && args.q >= n {
         // An invalid file is the first thing to fix (and the likelier
         // mistake): name it rather than the count. At most 16 files (q's

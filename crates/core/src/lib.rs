@@ -50,8 +50,8 @@ pub use data::{Dataset, Precision, Rows, Store, StoreIdentity, TransformKind, bu
 pub use error::{CoreError, ParamError, Result};
 pub use eval::{fidelity, loo};
 pub use fit::{
-    DEFAULT_KERNEL, DEFAULT_TRANSFORM, FitOptions, FitReport, PAPER_KERNEL, PAPER_TRANSFORM,
-    StorePolicy, fit_dir, fit_dir_with,
+    DEFAULT_NOISE, DEFAULT_TRANSFORM, FitOptions, FitReport, PAPER_KERNEL, PAPER_TRANSFORM,
+    StorePolicy, default_kernel, fit_dir, fit_dir_with,
 };
 pub use gplvm::optim;
 pub use gplvm::{CheckedParams, DriftStats, Fit, GplvmParams, GramData, Kernel, OptimizerKind};

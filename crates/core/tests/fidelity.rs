@@ -7,8 +7,8 @@ mod common;
 use brdf_atlas_core::fidelity::{LOG_REL_OFFSET, fidelity};
 use brdf_atlas_core::loo::Every;
 use brdf_atlas_core::{
-    BlendRule, DEFAULT_KERNEL, FitOptions, GplvmParams, Model, NoProgress, PAPER_KERNEL, Precision,
-    TransformKind, fit_dir,
+    BlendRule, FitOptions, GplvmParams, Model, NoProgress, PAPER_KERNEL, Precision, TransformKind,
+    default_kernel, fit_dir,
 };
 use brdf_merl::albedo::Quadrature;
 use brdf_merl::synth::{Analytic, database};
@@ -83,7 +83,7 @@ fn own_point_and_held_out_figures_equal_a_dense_recomputation() {
     let rule = Quadrature::dense(DIMS, 2);
     for transform in TransformKind::ALL {
         let sub = tmp.path().join(transform.name());
-        let m = fit_materials(&sub, &materials, DIMS, transform, DEFAULT_KERNEL);
+        let m = fit_materials(&sub, &materials, DIMS, transform, default_kernel(7));
         let f = fidelity(
             m.store(),
             m.latent().as_ref(),
@@ -210,7 +210,7 @@ fn the_default_rule_keeps_a_material_at_its_own_point() {
     let i = materials.len() - 1;
     let want = rule.albedo(&materials[i].1.table(DIMS));
     for transform in TransformKind::ALL {
-        for kernel in [DEFAULT_KERNEL, PAPER_KERNEL] {
+        for kernel in [default_kernel(6), default_kernel(100), PAPER_KERNEL] {
             let sub = tmp
                 .path()
                 .join(format!("{}-{}", transform.name(), kernel.length_scale));
@@ -247,7 +247,7 @@ fn a_quarter_of_the_bins_gives_the_dense_albedo_at_full_resolution() {
         &synthetic(4),
         Dims::MERL,
         TransformKind::RelLog,
-        DEFAULT_KERNEL,
+        default_kernel(4),
     );
     let run = |every| {
         fidelity(

@@ -8,8 +8,8 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use brdf_atlas_core::{
-    DEFAULT_KERNEL, DEFAULT_TRANSFORM, Dataset, GplvmParams, GramData, NoProgress, OptimizerKind,
-    Precision, build_store,
+    DEFAULT_TRANSFORM, Dataset, GplvmParams, GramData, NoProgress, OptimizerKind, Precision,
+    build_store, default_kernel,
 };
 use brdf_merl::Dims;
 
@@ -66,10 +66,11 @@ pub fn measure(
             &NoProgress,
         )?;
         let gram = GramData::new(y, DIMS.values())?;
+        let kernel = default_kernel(n);
         for optimizer in [OptimizerKind::HookeJeeves, OptimizerKind::Lbfgs] {
             let params = GplvmParams::new(2)
-                .length_scale(DEFAULT_KERNEL.length_scale)
-                .noise(DEFAULT_KERNEL.noise)
+                .length_scale(kernel.length_scale)
+                .noise(kernel.noise)
                 .optimizer(optimizer)
                 .check()?;
             let t = Instant::now();

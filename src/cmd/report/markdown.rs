@@ -56,9 +56,10 @@ pub fn write(
     writeln!(
         w,
         "Opening and validating the {n} files took {}. Files here: `loo.csv`, `loo-materials.csv`, `fits.csv`, `stores.csv`, \
-         `precision.csv`, `map-samples.csv`, `map-size.csv`, `plausibility.csv`, and the plots below.\n",
+         `precision.csv`, `map-samples.csv`, `map-size.csv`, `plausibility.csv`, `fidelity.csv`, and the plots below.\n",
         secs(r.scan)
     )?;
+    super::fidelity::markdown(w, r)?;
     leave_one_out(w, plan, r)?;
     fits(w, r)?;
     maps(w, plan, r)?;

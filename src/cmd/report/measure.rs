@@ -121,6 +121,8 @@ pub struct PlausibilityRow {
 #[derive(Default)]
 pub struct Results {
     pub names: Vec<String>,
+    /// The settings compared on how their markers give materials back.
+    pub fidelity: Vec<super::fidelity::Row>,
     pub dims: String,
     /// Values per material.
     pub d: usize,

@@ -11,6 +11,7 @@
 //! and an earlier report stays until the new one is complete.
 
 mod csv;
+mod fidelity;
 mod growth;
 mod maps;
 mod markdown;
@@ -142,6 +143,7 @@ pub fn write(args: &Args, say: &mut dyn Write) -> Result<Summary, Error> {
     let plan = Plan::new(args, n);
     drop(bars);
     let mut steps = Steps::new(start, say);
+    fidelity::measure(&args.dir, &work, &mut steps, &mut r)?;
     measure::measure(&data, &plan, &work, &mut steps, &mut r)?;
     let sizes: Vec<usize> = args.growth.iter().map(|&n| n as usize).collect();
     growth::measure(&sizes, &work, &mut steps, &mut r)?;
@@ -151,7 +153,9 @@ pub fn write(args: &Args, say: &mut dyn Write) -> Result<Summary, Error> {
     let dir = staged.path();
     csv::write_all(dir, &r)?;
     plausible::csv(dir, &r)?;
+    fidelity::csv(dir, &r)?;
     plot::all(dir, &r)?;
+    fidelity::picture(dir, &r)?;
     plausible::picture(dir, &r, plan.plausibility_grid)?;
     if !r.growth.is_empty() {
         growth::csv(dir, &r)?;
@@ -195,7 +199,7 @@ fn is_report(dir: &Path) -> bool {
 }
 
 /// Write one file of the report; a failure is a write error naming it.
-fn write_file(
+pub(super) fn write_file(
     path: &Path,
     fill: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
 ) -> Result<(), Error> {

@@ -1,0 +1,371 @@
+//! The report's first section: does each material's marker give it back?
+//! Settings of the transform and the kernel (the paper's, the default, and
+//! between) compared on the errors a person sees, each material at its own
+//! point and predicted from the others ([`brdf_atlas_core::fidelity`]),
+//! beside the older `ln(1 + v)` RMSE, how far apart the materials land, what
+//! the model knows over the map's view, how plausible its materials are,
+//! and what the fit costs.
+
+use std::io::{self, Write};
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use brdf_atlas_core::fidelity::{Judged, Summary, fidelity};
+use brdf_atlas_core::loo::Every;
+use brdf_atlas_core::{
+    BlendRule, DEFAULT_NOISE, DEFAULT_TRANSFORM, FitOptions, GplvmParams, Kernel, Model,
+    NoProgress, PAPER_KERNEL, PAPER_TRANSFORM, Precision, StorePolicy, TransformKind, View,
+    default_kernel, fit_dir_with,
+};
+use brdf_merl::synth::SplitMix64;
+
+use super::measure::{Results, Steps};
+use super::plot::{Axis, COLORS, Series, chart};
+use crate::error::Error;
+
+/// One setting compared.
+#[derive(Debug, Clone, Copy)]
+pub struct Setting {
+    pub transform: TransformKind,
+    pub kernel: Kernel,
+    /// What the report calls it.
+    pub label: &'static str,
+}
+
+/// The settings compared for `n` materials: the paper's, the default, and
+/// a step of each between them.
+pub fn settings(n: usize) -> [Setting; 5] {
+    let default = default_kernel(n);
+    [
+        Setting {
+            transform: PAPER_TRANSFORM,
+            kernel: PAPER_KERNEL,
+            label: "the paper's (`--paper`)",
+        },
+        Setting {
+            transform: PAPER_TRANSFORM,
+            kernel: default,
+            label: "`log`, the default kernel",
+        },
+        Setting {
+            transform: DEFAULT_TRANSFORM,
+            kernel: PAPER_KERNEL,
+            label: "`rel-log`, the paper's kernel",
+        },
+        Setting {
+            transform: DEFAULT_TRANSFORM,
+            kernel: Kernel {
+                length_scale: 0.5 * (default.length_scale + PAPER_KERNEL.length_scale),
+                noise: DEFAULT_NOISE,
+            },
+            label: "`rel-log`, l halfway",
+        },
+        Setting {
+            transform: DEFAULT_TRANSFORM,
+            kernel: default,
+            label: "the default",
+        },
+    ]
+}
+
+/// Random points of the default view whose materials' plausibility is measured.
+const PLAUSIBILITY_POINTS: usize = 32;
+
+/// What one setting gave.
+#[derive(Debug, Clone)]
+pub struct Row {
+    pub setting: Setting,
+    /// Each material at its own point (the default rule).
+    pub own: Vec<Judged>,
+    /// Each material predicted from the others (the default rule).
+    pub held_out: Vec<Judged>,
+    /// Nearest-neighbour latent distances: median, smallest, and how many
+    /// materials lie within 0.01 of another.
+    pub nn_median: f64,
+    pub nn_min: f64,
+    pub close: usize,
+    /// Share of a 41 x 41 grid of the default view with predictive variance below 0.1.
+    pub known: f64,
+    /// Largest directional albedo at random points of the default view: 90th percentile and worst.
+    pub max_albedo: [f64; 2],
+    /// The fit (store pass, optimisation, own-point pass) and the leave-one-out pass.
+    pub fit_time: Duration,
+}
+
+/// Fit every setting on `dir` (one store per transform, in `work`) and measure it.
+pub fn measure(dir: &Path, work: &Path, steps: &mut Steps, r: &mut Results) -> Result<(), Error> {
+    for setting in settings(r.names.len()) {
+        steps.say(&format!(
+            "fidelity: {} ({}, l = {}, mu = {:e})",
+            setting.label,
+            setting.transform.name(),
+            setting.kernel.length_scale,
+            setting.kernel.noise
+        ))?;
+        let model = work.join(format!("fidelity-{}.atlas", setting.transform.name()));
+        let options = FitOptions {
+            params: GplvmParams::new(2)
+                .length_scale(setting.kernel.length_scale)
+                .noise(setting.kernel.noise)
+                .check()?,
+            transform: setting.transform,
+            precision: Precision::F32,
+        };
+        let t = Instant::now();
+        fit_dir_with(dir, &model, &options, StorePolicy::Reuse, &NoProgress)?;
+        let fit_time = t.elapsed();
+        let m = Model::open(&model)?;
+        let f = fidelity(
+            m.store(),
+            m.latent().as_ref(),
+            &m.file().kernel,
+            true,
+            Every::QUARTER,
+            &NoProgress,
+        )?;
+        let (nn_median, nn_min, close) = spacing(&m);
+        r.fidelity.push(Row {
+            setting,
+            own: f.own,
+            held_out: f.held_out.unwrap_or_default(),
+            nn_median,
+            nn_min,
+            close,
+            known: known_share(&m)?,
+            max_albedo: max_albedo(&m)?,
+            fit_time,
+        });
+    }
+    Ok(())
+}
+
+/// Median and smallest nearest-neighbour distance, and materials within 0.01 of another.
+fn spacing(m: &Model) -> (f64, f64, usize) {
+    let x = m.latent();
+    let n = x.nrows();
+    let mut nn: Vec<f64> = (0..n)
+        .map(|i| {
+            (0..n)
+                .filter(|&j| j != i)
+                .map(|j| ((x[(i, 0)] - x[(j, 0)]).powi(2) + (x[(i, 1)] - x[(j, 1)]).powi(2)).sqrt())
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+    nn.sort_by(f64::total_cmp);
+    let close = nn.iter().filter(|&&d| d < 0.01).count();
+    (nn[n / 2], nn[0], close)
+}
+
+/// Share of a 41 x 41 grid of the default view where the predictive variance is below 0.1.
+fn known_share(m: &Model) -> Result<f64, Error> {
+    let (v, k) = (View::default(), 41);
+    let mut known = 0;
+    for a in 0..k {
+        for b in 0..k {
+            let t = |i: usize| i as f64 / (k - 1) as f64;
+            let x = [v.x0 + (v.x1 - v.x0) * t(a), v.y0 + (v.y1 - v.y0) * t(b)];
+            known += usize::from(m.at(&x)?.confidence().variance < 0.1);
+        }
+    }
+    Ok(known as f64 / (k * k) as f64)
+}
+
+/// 90th percentile and worst of the largest directional albedo of the
+/// default material at random points of the default view (seed 1).
+fn max_albedo(m: &Model) -> Result<[f64; 2], Error> {
+    let v = View::default();
+    let mut rng = SplitMix64::new(1);
+    let xs: Vec<[f64; 2]> = (0..PLAUSIBILITY_POINTS)
+        .map(|_| [rng.range(v.x0, v.x1), rng.range(v.y0, v.y1)])
+        .collect();
+    let mut a: Vec<f64> = m
+        .plausibilities(&xs, BlendRule::Floor)?
+        .iter()
+        .map(|p| p.max_albedo)
+        .collect();
+    a.sort_by(f64::total_cmp);
+    Ok([a[a.len() * 9 / 10], a[a.len() - 1]])
+}
+
+/// The section's text: the table, the materials not given back, the plot.
+pub fn markdown(w: &mut dyn Write, r: &Results) -> io::Result<()> {
+    if r.fidelity.is_empty() {
+        return Ok(());
+    }
+    writeln!(w, "## Does each marker give its material back?\n")?;
+    writeln!(
+        w,
+        "Each setting fitted with L-BFGS, then every material judged at its own point (the \
+         default rule, the soft floor) and predicted from the others (leave-one-out, closed \
+         form), on every 4th phi_d bin: the relative albedo error of every channel (median / \
+         90th percentile / worst), the log-relative table error (RMSE of ln((v' + e) / (v + e)), \
+         e = 0.001, median) and the older ln(1 + v) RMSE (median). `known`: the share of the \
+         default view where the predictive variance is below 0.1; `albedo`: the largest \
+         directional albedo of the default material at {PLAUSIBILITY_POINTS} random points of \
+         the default view (90th percentile / worst; at most 1 for a physical material). \
+         `fidelity.csv` has every material.\n"
+    )?;
+    writeln!(
+        w,
+        "| setting | own point: albedo | log-rel | left out: albedo | log-rel | ln(1 + v) | NN distance median (smallest; within 0.01) | known | albedo | fit |"
+    )?;
+    writeln!(w, "|{}", "---|".repeat(10))?;
+    for row in &r.fidelity {
+        let (own, held) = (Summary::of(&row.own), Summary::of(&row.held_out));
+        let s = row.setting;
+        writeln!(
+            w,
+            "| {} ({}, l = {}, mu = {:e}) | {} | {:.4} | {} | {:.3} | {:.4} | {:.3} ({:.4}; {}) | {:.0}% | {:.2} / {:.2} | {:.2} s |",
+            s.label,
+            s.transform.name(),
+            s.kernel.length_scale,
+            s.kernel.noise,
+            spread(own.albedo),
+            own.log_rel.median,
+            spread(held.albedo),
+            held.log_rel.median,
+            held.log.median,
+            row.nn_median,
+            row.nn_min,
+            row.close,
+            100.0 * row.known,
+            row.max_albedo[0],
+            row.max_albedo[1],
+            row.fit_time.as_secs_f64()
+        )?;
+    }
+    writeln!(w)?;
+    for row in &r.fidelity {
+        let mut missed: Vec<(f64, usize)> = row
+            .own
+            .iter()
+            .enumerate()
+            .filter(|(_, j)| !j.gives_back())
+            .map(|(i, j)| (j.albedo_error(), i))
+            .collect();
+        missed.sort_by(|a, b| b.0.total_cmp(&a.0));
+        if missed.is_empty() {
+            writeln!(
+                w,
+                "- {}: every material's point gives it back.",
+                row.setting.label
+            )?;
+            continue;
+        }
+        let names: Vec<String> = missed
+            .iter()
+            .take(8)
+            .map(|&(_, i)| format!("{} ({}x)", r.names[i], ratio(row.own[i].worst_ratio())))
+            .collect();
+        writeln!(
+            w,
+            "- {}: {} of {} materials not given back (albedo more than 5% off), worst first: {}{}.",
+            row.setting.label,
+            missed.len(),
+            row.own.len(),
+            names.join(", "),
+            if missed.len() > 8 { ", ..." } else { "" }
+        )?;
+    }
+    writeln!(
+        w,
+        "\n![Own-point albedo error of every material by setting](fidelity.png)\n"
+    )
+}
+
+/// `median / p90 / worst` as percentages.
+fn spread(s: brdf_atlas_core::fidelity::Spread) -> String {
+    format!(
+        "{:.2}% / {:.2}% / {:.1}%",
+        100.0 * s.median,
+        100.0 * s.p90,
+        100.0 * s.worst
+    )
+}
+
+fn ratio(r: f64) -> String {
+    if r >= 10.0 {
+        format!("{r:.0}")
+    } else {
+        format!("{r:.2}")
+    }
+}
+
+/// `fidelity.csv`: every material under every setting.
+pub fn csv(dir: &Path, r: &Results) -> Result<(), Error> {
+    if r.fidelity.is_empty() {
+        return Ok(());
+    }
+    super::write_file(&dir.join("fidelity.csv"), |f| {
+        writeln!(
+            f,
+            "transform,length_scale,noise,material,prediction,albedo_r,albedo_g,albedo_b,predicted_r,predicted_g,predicted_b,largest_relative_error,log_rel_rmse,log_rmse"
+        )?;
+        for row in &r.fidelity {
+            let s = row.setting;
+            for (what, judged) in [("own", &row.own), ("left-out", &row.held_out)] {
+                for (name, j) in r.names.iter().zip(judged.iter()) {
+                    writeln!(
+                        f,
+                        "{},{},{:e},{name},{what},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
+                        s.transform.name(),
+                        s.kernel.length_scale,
+                        s.kernel.noise,
+                        j.albedo[0],
+                        j.albedo[1],
+                        j.albedo[2],
+                        j.predicted[0],
+                        j.predicted[1],
+                        j.predicted[2],
+                        j.albedo_error(),
+                        j.log_rel,
+                        j.log
+                    )?;
+                }
+            }
+        }
+        Ok(())
+    })
+}
+
+/// `fidelity.png`: each material's own-point albedo error (largest
+/// channel), sorted, one line per setting, on a log axis.
+pub fn picture(dir: &Path, r: &Results) -> Result<(), Error> {
+    if r.fidelity.is_empty() {
+        return Ok(());
+    }
+    let series: Vec<Series> = r
+        .fidelity
+        .iter()
+        .enumerate()
+        .map(|(k, row)| {
+            let mut e: Vec<f64> = row.own.iter().map(|j| j.albedo_error().max(1e-6)).collect();
+            e.sort_by(f64::total_cmp);
+            Series {
+                name: row.setting.label.replace('`', ""),
+                color: COLORS[k % COLORS.len()],
+                points: e
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &v)| ((i + 1) as f64, v.log10()))
+                    .collect(),
+                markers_only: false,
+            }
+        })
+        .collect();
+    chart(
+        &dir.join("fidelity.png"),
+        "Each material at its own point: albedo error, largest channel (5% and above: not given back)",
+        Axis {
+            label: "materials, sorted by error",
+            log: false,
+            integer: true,
+        },
+        Axis {
+            label: "relative albedo error",
+            log: true,
+            integer: false,
+        },
+        &series,
+    )
+}
