@@ -31,7 +31,6 @@
 //! eigenvalues of `Y` ([`discarded`]); it is not a held-out error.
 
 use brdf_merl::Dims;
-use brdf_merl::albedo::Quadrature;
 use faer::Mat;
 
 use crate::dense::product::matmul;
@@ -47,6 +46,7 @@ use crate::simd::fold::{GROUPS, ordered_blocks_then};
 /// Rows of the store per block of the LOO pass.
 const BLOCK: usize = 1024;
 
+pub use super::every::Every;
 pub use super::nonneg::{banded_steps, convex_predictor, plausible_predictors};
 pub use super::predictors::{discarded, gp_predictor, pca_in_sample_predictor, pca_predictor};
 pub use super::projected::{capped_simplex, projected_predictor};
@@ -177,90 +177,6 @@ pub fn evaluate_mixed(
     progress: &dyn Progress,
 ) -> Result<Evaluation> {
     evaluate_some(store, predictors, mixes, None, Every::BIN, progress)
-}
-
-/// Which bins a pass reads: every `theta_d`-th along theta_d and every
-/// `phi_d`-th along phi_d, all of theta_h (the highlight lives there), each
-/// kept bin in the middle of the cell of bins it stands for. A kept bin's
-/// albedo weight is the dense rule's over its cell, so the albedo stays an
-/// integral over the whole table of a piecewise-constant surrogate. The
-/// integrand is smooth in phi_d: every 4th phi_d bin (a quarter of the
-/// bins) is within 0.02% of the dense rule at the MERL resolution on
-/// sharp synthetic metals and their blends (tested), where every 2nd
-/// theta_d bin is 4% off. The table errors are then RMSEs over the kept
-/// bins.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Every {
-    /// Step along theta_d.
-    pub theta_d: usize,
-    /// Step along phi_d.
-    pub phi_d: usize,
-}
-
-impl Every {
-    /// Every bin.
-    pub const BIN: Every = Every {
-        theta_d: 1,
-        phi_d: 1,
-    };
-    /// Every 4th phi_d bin: a quarter of the bins.
-    pub const QUARTER: Every = Every {
-        theta_d: 1,
-        phi_d: 4,
-    };
-
-    /// The first index of the cell of index `i` with step `step`.
-    fn cell(i: usize, step: usize) -> usize {
-        let step = step.max(1);
-        i / step * step
-    }
-
-    /// The kept index of the cell starting at `start`, clipped to `len`.
-    fn kept_in(start: usize, step: usize, len: usize) -> usize {
-        (start + step.max(1) / 2).min(len - 1)
-    }
-
-    fn keeps(self, dims: Dims, bin: usize) -> bool {
-        let (_, id, ip) = dims.unbin(bin);
-        let keep = |i: usize, step: usize, len: usize| {
-            i == Every::kept_in(Every::cell(i, step), step, len)
-        };
-        keep(id, self.theta_d, dims.theta_d) && keep(ip, self.phi_d, dims.phi_d)
-    }
-
-    /// The kept rows (all channels), or `None` when every row is kept.
-    fn rows(self, dims: Dims, rows: usize) -> Option<Vec<u32>> {
-        if self.theta_d <= 1 && self.phi_d <= 1 {
-            return None;
-        }
-        let bins = dims.bins();
-        Some(
-            (0..rows)
-                .filter(|&r| self.keeps(dims, r % bins))
-                .map(|r| r as u32)
-                .collect(),
-        )
-    }
-
-    /// The dense rule's albedo weights ([`albedo_weights`]) gathered onto
-    /// the kept bins.
-    fn weights(self, dims: Dims) -> Vec<f64> {
-        let dense = albedo_weights(dims);
-        if self == Every::BIN {
-            return dense;
-        }
-        let mut w = vec![0.0; dims.bins()];
-        for (bin, &wb) in dense.iter().enumerate() {
-            let (ih, id, ip) = dims.unbin(bin);
-            let kept = dims.bin(
-                ih,
-                Every::kept_in(Every::cell(id, self.theta_d), self.theta_d, dims.theta_d),
-                Every::kept_in(Every::cell(ip, self.phi_d), self.phi_d, dims.phi_d),
-            );
-            w[kept] += wb;
-        }
-        w
-    }
 }
 
 /// [`evaluate_mixed`] scoring only the outputs (matrix predictors, then
@@ -503,17 +419,6 @@ fn others_top(z: &[f64], tops: &mut [f64]) {
     for (i, t) in tops.iter_mut().enumerate() {
         *t = if i == at { second } else { first };
     }
-}
-
-/// The dense albedo rule ([`Quadrature::dense`], 2 sub-cells a bin) as a
-/// weight per bin: the rule the model's exact albedo uses.
-pub(crate) fn albedo_weights(dims: Dims) -> Vec<f64> {
-    let rule = Quadrature::dense(dims, 2);
-    let mut w = vec![0.0; dims.bins()];
-    for (&b, &wb) in rule.bins().iter().zip(rule.weights()) {
-        w[b as usize] += wb;
-    }
-    w
 }
 
 #[cfg(test)]

@@ -2,6 +2,7 @@
 //! material comes back at its own point.
 
 mod albedo_floor;
+mod every;
 pub mod fidelity;
 pub mod loo;
 mod nonneg;
