@@ -5,7 +5,7 @@ mod common;
 
 use brdf_atlas_core::loo::{CLAMP_BUDGET, CONVEX_LENGTH_RATIO, STEPS};
 use brdf_atlas_core::{BlendRule, FitOptions, GplvmParams, Model, NoProgress, Precision};
-use brdf_atlas_core::{TransformKind, fit_dir};
+use brdf_atlas_core::{DEFAULT_TRANSFORM, PAPER_KERNEL, TransformKind, default_kernel, fit_dir};
 use brdf_merl::directional::largest;
 use brdf_merl::{DirectionalRule, synth};
 use common::{DIMS, POINTS, fit};
@@ -315,19 +315,59 @@ fn hard_cases_stay_finite() {
         (ih * 90 < DIMS.theta_h * 60).then_some([0.1, 0.2, 0.3])
     });
     holes.write(hard.join("zz-holes.binary")).unwrap();
-    // Two materials allow one latent dimension.
-    for (dir, name, q) in [(&twins, "twins", 2), (&two, "two", 1), (&hard, "hard", 2)] {
-        let model = tmp.path().join(format!("{name}.atlas"));
+    // Two materials allow one latent dimension. Under the paper's settings
+    // and under the default transform with the default kernel (shorter
+    // for more materials).
+    let sets = [
+        (&twins, "twins", 2, 4),
+        (&two, "two", 1, 2),
+        (&hard, "hard", 2, 6),
+    ];
+    for ((dir, name, q, n), default) in sets.iter().flat_map(|s| [(s, false), (s, true)]) {
+        let (name, q) = (*name, *q);
+        let (transform, kernel) = if default {
+            (DEFAULT_TRANSFORM, default_kernel(*n))
+        } else {
+            (TransformKind::Log, PAPER_KERNEL)
+        };
+        let model = tmp
+            .path()
+            .join(format!("{name}-{}.atlas", transform.name()));
         let options = FitOptions {
-            params: GplvmParams::new(q).check().unwrap(),
-            transform: TransformKind::Log,
+            params: GplvmParams::new(q)
+                .length_scale(kernel.length_scale)
+                .noise(kernel.noise)
+                .check()
+                .unwrap(),
+            transform,
             precision: Precision::F64,
         };
         fit_dir(dir, &model, &options, &NoProgress).unwrap();
         let m = Model::open(&model).unwrap();
+        // Every material comes back at its own point, the twins and the
+        // mirror among them, and the latent points stay in the box.
+        let own = &m.file().fidelity.as_ref().unwrap().own;
+        if default {
+            for (j, name_j) in own.iter().zip(m.names()) {
+                assert!(j.gives_back(), "{name} {name_j}: {}", j.describe());
+            }
+        }
+        assert!(
+            m.latent()
+                .col_iter()
+                .all(|c| c.iter().all(|v| v.abs() <= 1.0 + 1e-12))
+        );
+        // Far from every material the model knows nothing, and says so.
+        let far = m.at(&[30.0, 30.0][..q]).unwrap().confidence();
+        assert!(far.is_low() && far.variance > 0.99, "{name}: {far:?}");
         for x in [[0.0, 0.0], [0.9, -0.9], [30.0, 30.0]] {
             for rule in [BlendRule::Gp, BlendRule::Plausible, BlendRule::Floor] {
                 let b = m.at_with(&x[..q], rule).unwrap();
+                let table = b.table().unwrap();
+                assert!(
+                    table.raw().iter().all(|v| v.is_finite()),
+                    "{name} {x:?} {rule:?}"
+                );
                 let (p, c) = (b.plausibility().unwrap(), b.confidence());
                 assert!(
                     [
