@@ -63,7 +63,7 @@ type Step = (&'static str, fn(&mut State) -> Result<(), Error>);
 const STEPS: &[Step] = &[
     ("Synthesise the material database", synthesise),
     ("Summarise it", summarise),
-    ("Fit a 2-D latent space to it (log transform)", fit_model),
+    ("Fit a 2-D latent space to it", fit_model),
     ("Draw the albedo map of the latent space", draw_map),
     (
         "Reconstruct a new material between the two nearest",

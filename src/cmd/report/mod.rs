@@ -143,7 +143,7 @@ pub fn write(args: &Args, say: &mut dyn Write) -> Result<Summary, Error> {
     let plan = Plan::new(args, n);
     drop(bars);
     let mut steps = Steps::new(start, say);
-    fidelity::measure(&args.dir, &work, &mut steps, &mut r)?;
+    fidelity::measure(&args.dir, &work, args.quick, &mut steps, &mut r)?;
     measure::measure(&data, &plan, &work, &mut steps, &mut r)?;
     let sizes: Vec<usize> = args.growth.iter().map(|&n| n as usize).collect();
     growth::measure(&sizes, &work, &mut steps, &mut r)?;
