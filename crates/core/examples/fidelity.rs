@@ -7,7 +7,7 @@
 //! cargo run --release -p brdf-atlas-core --example fidelity -- MODEL
 //! ```
 
-use brdf_atlas_core::fidelity::{Judged, Summary, fidelity};
+use brdf_atlas_core::fidelity::{Judged, Summary, fidelity, known_share, spacing};
 use brdf_atlas_core::loo::Every;
 use brdf_atlas_core::{Model, NoProgress};
 
@@ -59,42 +59,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         f.held_out_gp.as_deref().unwrap_or_default(),
     );
     let x = model.latent();
-    let n = x.nrows();
-    let mut nn: Vec<f64> = (0..n)
-        .map(|i| {
-            (0..n)
-                .filter(|&j| j != i)
-                .map(|j| ((x[(i, 0)] - x[(j, 0)]).powi(2) + (x[(i, 1)] - x[(j, 1)]).powi(2)).sqrt())
-                .fold(f64::INFINITY, f64::min)
-        })
-        .collect();
-    nn.sort_by(f64::total_cmp);
-    let edge = (0..n)
+    let edge = (0..x.nrows())
         .filter(|&i| x[(i, 0)].abs() > 0.999 || x[(i, 1)].abs() > 0.999)
         .count();
+    let s = spacing(x.as_ref());
     println!(
         "nearest-neighbour latent distance: median {:.3}, smallest {:.4}; {} within 0.01 of another; {edge} on the box edge",
-        nn[n / 2],
-        nn[0],
-        nn.iter().filter(|&&d| d < 0.01).count()
+        s.median, s.smallest, s.close
     );
-    // What the model knows over the map's default view: predictive
-    // variance on a 101 x 101 grid.
-    let view = brdf_atlas_core::View::default();
-    let k = 101;
-    let mut known = 0;
-    for a in 0..k {
-        for b in 0..k {
-            let x = [
-                view.x0 + (view.x1 - view.x0) * a as f64 / (k - 1) as f64,
-                view.y0 + (view.y1 - view.y0) * b as f64 / (k - 1) as f64,
-            ];
-            known += usize::from(model.at(&x)?.confidence().variance < 0.1);
-        }
-    }
     println!(
-        "predictive variance below 0.1 on {:.1}% of the default view ({k} x {k} points)",
-        100.0 * known as f64 / (k * k) as f64
+        "predictive variance below 0.1 on {:.1}% of the default view (101 x 101 points)",
+        100.0 * known_share(&model, 101)?
     );
     for (i, j) in f.own.iter().enumerate() {
         if !j.gives_back() {

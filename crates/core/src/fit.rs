@@ -35,7 +35,7 @@ pub const DEFAULT_TRANSFORM: TransformKind = TransformKind::RelLog;
 pub const DEFAULT_NOISE: f64 = 3e-5;
 
 /// The kernel a fit of `materials` materials uses unless told otherwise:
-/// `l = 3 / sqrt(N)` within `[0.3, 1]`, `mu = 3e-5`. N materials spread
+/// `l = 3 / sqrt(N)` within `[0.3, 1]` (to a thousandth), `mu = 3e-5`. N materials spread
 /// over the box `[-1, 1]^2` lie about `2 / sqrt(N)` apart, so the length
 /// scale stays 1.5 times their spacing: short enough that every material's
 /// own point gives it back, long enough that the model knows the whole map
@@ -48,7 +48,9 @@ pub const DEFAULT_NOISE: f64 = 3e-5;
 /// unknown, l = 0.87 leaves 1%.
 pub fn default_kernel(materials: usize) -> Kernel {
     Kernel {
-        length_scale: (3.0 / (materials.max(1) as f64).sqrt()).clamp(0.3, 1.0),
+        // To a thousandth, as a person would write it.
+        length_scale: ((3.0 / (materials.max(1) as f64).sqrt()).clamp(0.3, 1.0) * 1e3).round()
+            / 1e3,
         noise: DEFAULT_NOISE,
     }
 }

@@ -10,7 +10,7 @@ use std::io::{self, Write};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use brdf_atlas_core::fidelity::{Judged, Summary, fidelity};
+use brdf_atlas_core::fidelity::{Judged, Spacing, Summary, fidelity, known_share, spacing};
 use brdf_atlas_core::loo::Every;
 use brdf_atlas_core::{
     BlendRule, DEFAULT_NOISE, DEFAULT_TRANSFORM, FitOptions, GplvmParams, Kernel, Model,
@@ -79,11 +79,8 @@ pub struct Row {
     pub own: Vec<Judged>,
     /// Each material predicted from the others (the default rule).
     pub held_out: Vec<Judged>,
-    /// Nearest-neighbour latent distances: median, smallest, and how many
-    /// materials lie within 0.01 of another.
-    pub nn_median: f64,
-    pub nn_min: f64,
-    pub close: usize,
+    /// How far apart the materials land.
+    pub spacing: Spacing,
     /// Share of a 41 x 41 grid of the default view with predictive variance below 0.1.
     pub known: f64,
     /// Largest directional albedo at random points of the default view: 90th percentile and worst.
@@ -137,51 +134,18 @@ pub fn measure(
             Every::QUARTER,
             &NoProgress,
         )?;
-        let (nn_median, nn_min, close) = spacing(&m);
+        let spacing = spacing(m.latent().as_ref());
         r.fidelity.push(Row {
             setting,
             own: f.own,
             held_out: f.held_out.unwrap_or_default(),
-            nn_median,
-            nn_min,
-            close,
-            known: known_share(&m)?,
+            spacing,
+            known: known_share(&m, 41)?,
             max_albedo: max_albedo(&m)?,
             fit_time,
         });
     }
     Ok(())
-}
-
-/// Median and smallest nearest-neighbour distance, and materials within 0.01 of another.
-fn spacing(m: &Model) -> (f64, f64, usize) {
-    let x = m.latent();
-    let n = x.nrows();
-    let mut nn: Vec<f64> = (0..n)
-        .map(|i| {
-            (0..n)
-                .filter(|&j| j != i)
-                .map(|j| ((x[(i, 0)] - x[(j, 0)]).powi(2) + (x[(i, 1)] - x[(j, 1)]).powi(2)).sqrt())
-                .fold(f64::INFINITY, f64::min)
-        })
-        .collect();
-    nn.sort_by(f64::total_cmp);
-    let close = nn.iter().filter(|&&d| d < 0.01).count();
-    (nn[n / 2], nn[0], close)
-}
-
-/// Share of a 41 x 41 grid of the default view where the predictive variance is below 0.1.
-fn known_share(m: &Model) -> Result<f64, Error> {
-    let (v, k) = (View::default(), 41);
-    let mut known = 0;
-    for a in 0..k {
-        for b in 0..k {
-            let t = |i: usize| i as f64 / (k - 1) as f64;
-            let x = [v.x0 + (v.x1 - v.x0) * t(a), v.y0 + (v.y1 - v.y0) * t(b)];
-            known += usize::from(m.at(&x)?.confidence().variance < 0.1);
-        }
-    }
-    Ok(known as f64 / (k * k) as f64)
 }
 
 /// 90th percentile and worst of the largest directional albedo of the
@@ -239,9 +203,9 @@ pub fn markdown(w: &mut dyn Write, r: &Results) -> io::Result<()> {
             spread(held.albedo),
             held.log_rel.median,
             held.log.median,
-            row.nn_median,
-            row.nn_min,
-            row.close,
+            row.spacing.median,
+            row.spacing.smallest,
+            row.spacing.close,
             100.0 * row.known,
             row.max_albedo[0],
             row.max_albedo[1],

@@ -170,3 +170,58 @@ pub fn judge_tables(rule: &Quadrature, truth: &MerlTable, got: &MerlTable) -> Ju
         log: rms(log),
     }
 }
+
+/// How far apart the materials land: the median and smallest distance from
+/// each latent point to its nearest neighbour, and how many lie within
+/// 0.01 of another.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Spacing {
+    /// Median nearest-neighbour distance.
+    pub median: f64,
+    /// Smallest nearest-neighbour distance.
+    pub smallest: f64,
+    /// Materials within 0.01 of another.
+    pub close: usize,
+}
+
+/// The [`Spacing`] of latent points `latent` (`N x q`, N >= 2).
+pub fn spacing(latent: MatRef<'_, f64>) -> Spacing {
+    let pts = rows_of(latent);
+    let mut nn: Vec<f64> = (0..pts.len())
+        .map(|i| {
+            (0..pts.len())
+                .filter(|&j| j != i)
+                .map(|j| {
+                    let d2: f64 = pts[i]
+                        .iter()
+                        .zip(&pts[j])
+                        .map(|(a, b)| (a - b) * (a - b))
+                        .sum();
+                    d2.sqrt()
+                })
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+    nn.sort_by(f64::total_cmp);
+    Spacing {
+        median: nn.get(nn.len() / 2).copied().unwrap_or(f64::INFINITY),
+        smallest: nn.first().copied().unwrap_or(f64::INFINITY),
+        close: nn.iter().filter(|&&d| d < 0.01).count(),
+    }
+}
+
+/// The share of a `k x k` grid over the map's default view where the
+/// model's predictive variance is below 0.1: how much of its map the model
+/// knows (a 2-D model).
+pub fn known_share(model: &crate::Model, k: usize) -> Result<f64> {
+    let (v, k) = (crate::View::default(), k.max(2));
+    let t = |i: usize| i as f64 / (k - 1) as f64;
+    let mut known = 0;
+    for a in 0..k {
+        for b in 0..k {
+            let x = [v.x0 + (v.x1 - v.x0) * t(a), v.y0 + (v.y1 - v.y0) * t(b)];
+            known += usize::from(model.at(&x)?.confidence().variance < 0.1);
+        }
+    }
+    Ok(known as f64 / (k * k) as f64)
+}
