@@ -406,3 +406,76 @@ fn a_failed_synth_replaces_no_file() {
     assert_eq!(contents(&files), before);
     assert_eq!(leftovers(dir.path()), Vec::<String>::new());
 }
+
+/// Run the tool with `args`, killed if it takes longer than 20 s (a read of
+/// a named pipe with no writer would wait forever).
+fn within_seconds(args: &[&Path]) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_brdf-atlas"))
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > std::time::Duration::from_secs(20) {
+            child.kill().unwrap();
+            panic!("brdf-atlas {args:?} did not finish in 20 s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+#[test]
+fn files_that_are_not_regular_files_are_named_at_once() {
+    let (dir, model) = fixture();
+    let fifo = dir.path().join("pipe.binary");
+    let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+    // SAFETY: a valid C string; mkfifo only creates the node.
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    let socket = dir.path().join("socket.binary");
+    let _listener = std::os::unix::net::UnixListener::bind(&socket).unwrap();
+    let device = dir.path().join("zero.binary");
+    std::os::unix::fs::symlink("/dev/zero", &device).unwrap();
+    let kinds = [
+        (&fifo, "a named pipe"),
+        (&socket, "a socket"),
+        (&device, "a character device"),
+    ];
+    for (path, kind) in kinds {
+        let want = format!("{}: is {kind}, not a regular file", path.display());
+        // As a MERL file, and as a model.
+        for args in [
+            vec![Path::new("info"), path.as_path()],
+            vec![Path::new("locate"), model.as_path(), path.as_path()],
+            vec![
+                Path::new("map"),
+                path.as_path(),
+                Path::new("-o"),
+                &dir.path().join("x.png"),
+            ],
+        ] {
+            let out = within_seconds(&args);
+            let (_, stderr) = texts(&out);
+            assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+            assert_eq!(stderr.trim_end(), format!("error: {want}"), "{args:?}");
+        }
+        // Among a fit's inputs it stops the fit, named, as any invalid file does.
+        let data = dir.path().join(format!("data-{}", kind.replace(' ', "-")));
+        synth(&data, 3, "8,8,16", 7);
+        let entry = data.join("zz.binary");
+        std::os::unix::fs::symlink(path, &entry).unwrap();
+        let out_model = dir.path().join("new.atlas");
+        let out = within_seconds(&[Path::new("fit"), &data, Path::new("-o"), &out_model]);
+        let (_, stderr) = texts(&out);
+        assert_eq!(out.status.code(), Some(1), "fit: {stderr}");
+        assert_eq!(
+            stderr.trim_end(),
+            format!("error: {}: is {kind}, not a regular file", entry.display()),
+        );
+        assert!(!out_model.exists());
+        assert!(!dir.path().join("new.atlas.store").exists());
+    }
+    assert!(!dir.path().join("x.png").exists());
+}

@@ -97,7 +97,7 @@ fn count_binaries(dir: &Path) -> Option<usize> {
         entries
             .filter_map(std::result::Result::ok)
             .map(|e| e.path())
-            .filter(|p| p.extension().is_some_and(|e| e == "binary") && p.is_file())
+            .filter(|p| p.extension().is_some_and(|e| e == "binary") && !p.is_dir())
             .count(),
     )
 }

@@ -210,7 +210,7 @@ fn count_binaries(dir: &Path) -> Option<usize> {
         entries
             .filter_map(Result::ok)
             .map(|e| e.path())
-            .filter(|p| p.extension().is_some_and(|e| e == "binary") && p.is_file())
+            .filter(|p| p.extension().is_some_and(|e| e == "binary") && !p.is_dir())
             .count(),
     )
 }

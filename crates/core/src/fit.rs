@@ -329,7 +329,7 @@ fn reusable(
     options: &FitOptions,
     inputs: &[InputIdentity],
 ) -> Option<(Store, faer::Mat<f64>, StoreRef)> {
-    let text = std::fs::read(model).ok()?;
+    let text = brdf_mapguard::read_regular(model).ok()?;
     let old = ModelFile::from_json(model, &text).ok()?;
     let same = old.inputs.as_deref() == Some(inputs)
         && old.transform == options.transform

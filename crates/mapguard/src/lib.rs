@@ -41,6 +41,9 @@ use memmap2::Mmap;
 
 #[cfg(target_os = "linux")]
 mod handler;
+mod regular;
+
+pub use regular::{open_regular, read_regular, regular_file};
 mod registry;
 
 /// How [`GuardedMap::changed`] looks for a same-size rewrite.
@@ -103,7 +106,7 @@ impl std::fmt::Debug for GuardedMap {
 impl GuardedMap {
     /// Open and map the file at `path`, read-only.
     pub fn open(path: &Path, watch: Watch) -> io::Result<GuardedMap> {
-        let file = File::open(path)?;
+        let file = open_regular(path)?;
         let seen = Stamp::of(&file.metadata()?);
         #[cfg(target_os = "linux")]
         handler::install();

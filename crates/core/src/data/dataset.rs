@@ -42,7 +42,10 @@ impl Dataset {
         let mut ignored = Vec::new();
         for entry in std::fs::read_dir(&dir).map_err(|e| CoreError::io(&dir, e))? {
             let path = entry.map_err(|e| CoreError::io(&dir, e))?.path();
-            if path.extension().is_some_and(|e| e == "binary") && path.is_file() {
+            // Every `.binary` entry but a directory is a MERL file to open:
+            // one that is not a regular file (a named pipe, a device) is
+            // refused by name, as any other invalid file is.
+            if path.extension().is_some_and(|e| e == "binary") && !path.is_dir() {
                 paths.push(path);
             } else {
                 let why = if path.is_dir() {

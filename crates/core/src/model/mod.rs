@@ -73,7 +73,7 @@ impl Model {
 
     fn open_with(path: &Path, verify: bool) -> Result<Model> {
         let path = path.to_path_buf();
-        let text = std::fs::read(&path).map_err(|e| CoreError::io(&path, e))?;
+        let text = brdf_mapguard::read_regular(&path).map_err(|e| CoreError::io(&path, e))?;
         let file = ModelFile::from_json(&path, &text)?;
         let dir = path.parent().unwrap_or(Path::new("."));
         let store_path = dir.join(&file.store.path);

@@ -285,7 +285,7 @@ impl AlbedoLattice {
     /// The lattice saved at `path` for `model`: an error naming the file if
     /// it is not a lattice or not `model`'s.
     pub fn load(path: &Path, model: &Model) -> Result<AlbedoLattice> {
-        let text = std::fs::read(path).map_err(|e| CoreError::io(path, e))?;
+        let text = brdf_mapguard::read_regular(path).map_err(|e| CoreError::io(path, e))?;
         let bad = |why: String| CoreError::bad_file(path, why);
         let file: LatticeFile = serde_json::from_slice(&text)
             .map_err(|e| bad(format!("not a brdf-atlas lattice ({e})")))?;

@@ -92,7 +92,7 @@ pub const MAX_SIDE: usize = crate::limits::MAX_SIDECAR_SIDE;
 
 /// Read and check a sidecar.
 pub fn read_sidecar(path: &Path) -> Result<Sidecar> {
-    let bytes = std::fs::read(path).map_err(|e| CoreError::io(path, e))?;
+    let bytes = brdf_mapguard::read_regular(path).map_err(|e| CoreError::io(path, e))?;
     Sidecar::from_json(path, &bytes)
 }
 
