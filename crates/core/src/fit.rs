@@ -250,7 +250,6 @@ fn fit_staged(
         progress,
     )?;
     let fidelity_time = t4.elapsed();
-    let t3 = t3 + fidelity_time;
     let mut file = ModelFile::new(
         data.names.clone(),
         &fit,
@@ -298,7 +297,9 @@ fn fit_staged(
             let _ = std::fs::remove_file(staging);
         }
     }
-    let save_time = t3.elapsed();
+    // From the end of the optimisation (the checksum's join among it), less
+    // the own-point pass.
+    let save_time = t3.elapsed().saturating_sub(fidelity_time);
     Ok(FitReport {
         names: data.names.clone(),
         ignored: data.ignored.clone(),

@@ -27,12 +27,11 @@ use faer::{Mat, MatRef};
 use crate::data::store::Store;
 use crate::error::Result;
 use crate::eval::loo::{Evaluation, Every, Mix, Mixing, evaluate_some};
-use crate::eval::nonneg::convex_predictor;
+use crate::eval::nonneg::{convex_predictor, convex_rows};
 use crate::eval::predictors::{gp_predictor, needs_two};
 use crate::gplvm::kernel::{Kernel, rows_of};
 use crate::gplvm::likelihood::factor;
 use crate::progress::Progress;
-use crate::query::budget::convex_weights;
 
 pub use crate::eval::loo::LOG_REL_OFFSET;
 pub use crate::model::judged::{Fidelity, GIVES_BACK, Judged, MARKER_RADIUS, Spread, Summary};
@@ -44,17 +43,6 @@ pub fn own_point_predictor(kernel: &Kernel, latent: MatRef<'_, f64>) -> Result<M
     Ok(Mat::from_fn(n, n, |i, j| {
         f64::from(u8::from(i == j)) - kernel.noise * a[(i, j)]
     }))
-}
-
-/// The convex blend at every material's own point (the material itself
-/// unless another lies on the same point, [`convex_weights`]).
-fn own_convex_predictor(kernel: &Kernel, latent: MatRef<'_, f64>) -> Mat<f64> {
-    let pts = rows_of(latent);
-    let rows: Vec<Vec<f64>> = pts
-        .iter()
-        .map(|x| convex_weights(&pts, x, kernel.length_scale, None))
-        .collect();
-    Mat::from_fn(pts.len(), pts.len(), |i, j| rows[i][j])
 }
 
 /// The fidelity of the model with latent points `latent` and `kernel` over
@@ -71,7 +59,7 @@ pub fn fidelity(
     // Outputs: the matrix predictors, then the mixes; a convex blend only
     // feeds its mix. At the own points it is the material itself unless
     // two materials share a point: then it takes a product of its own.
-    let convex = own_convex_predictor(kernel, latent);
+    let convex = convex_rows(kernel, latent, false);
     let n = latent.nrows();
     let itself = (0..n).all(|i| (0..n).all(|j| convex[(i, j)] == f64::from(u8::from(i == j))));
     let mut predictors = vec![own_point_predictor(kernel, latent)?];

@@ -36,7 +36,7 @@ use faer::Mat;
 use crate::dense::product::matmul;
 
 use super::score::{RowIds, RowScratch, Scoring, Sums, score_block};
-use crate::data::store::{Rows, Store};
+use crate::data::store::Store;
 use crate::data::transform::{InverseForm, TransformKind};
 use crate::error::{ParamError, Result};
 use crate::progress::Progress;
@@ -299,24 +299,11 @@ pub fn evaluate_some(
                 None => RowIds::From(range.start),
             };
             let z = &mut g.zbuf[..len * n];
-            match (store.z(), ids) {
-                (Rows::F32(s), RowIds::From(r0)) => z
-                    .iter_mut()
-                    .zip(&s[r0 * n..(r0 + len) * n])
-                    .for_each(|(o, v)| *o = *v as f64),
-                (Rows::F64(s), RowIds::From(r0)) => z.copy_from_slice(&s[r0 * n..(r0 + len) * n]),
-                (Rows::F32(s), RowIds::List(k)) => {
+            match ids {
+                RowIds::From(r0) => store.copy_rows(r0, z),
+                RowIds::List(k) => {
                     for (o, &r) in z.chunks_exact_mut(n).zip(k) {
-                        let r = r as usize;
-                        o.iter_mut()
-                            .zip(&s[r * n..(r + 1) * n])
-                            .for_each(|(o, v)| *o = *v as f64);
-                    }
-                }
-                (Rows::F64(s), RowIds::List(k)) => {
-                    for (o, &r) in z.chunks_exact_mut(n).zip(k) {
-                        let r = r as usize;
-                        o.copy_from_slice(&s[r * n..(r + 1) * n]);
+                        store.copy_rows(r as usize, o);
                     }
                 }
             }

@@ -33,13 +33,20 @@ const PARTIALS_BUDGET: usize = 64 << 20;
 /// (`V_ii = 0`), with the kernel's length scale times
 /// [`crate::loo::CONVEX_LENGTH_RATIO`].
 pub fn convex_predictor(kernel: &Kernel, latent: MatRef<'_, f64>) -> Result<Mat<f64>> {
-    let n = latent.nrows();
-    super::predictors::needs_two(n)?;
+    super::predictors::needs_two(latent.nrows())?;
+    Ok(convex_rows(kernel, latent, true))
+}
+
+/// Row `i`: the convex weights at `x_i`, of the other materials when
+/// `leave_out` (leave-one-out), of all of them otherwise (a material's own
+/// point: the material alone, unless another shares the point).
+pub(super) fn convex_rows(kernel: &Kernel, latent: MatRef<'_, f64>, leave_out: bool) -> Mat<f64> {
     let pts = rows_of(latent);
+    let n = pts.len();
     let rows: Vec<Vec<f64>> = (0..n)
-        .map(|i| convex_weights(&pts, &pts[i], kernel.length_scale, Some(i)))
+        .map(|i| convex_weights(&pts, &pts[i], kernel.length_scale, leave_out.then_some(i)))
         .collect();
-    Ok(Mat::from_fn(n, n, |i, j| rows[i][j]))
+    Mat::from_fn(n, n, |i, j| rows[i][j])
 }
 
 /// The leave-one-out predictors of the plausible rule's earlier form, which
