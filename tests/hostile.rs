@@ -96,6 +96,42 @@ fn every_broken_merl_file_is_one_named_error_in_info_locate_and_fit() {
 }
 
 #[test]
+fn absurd_values_stop_every_transform_naming_the_file() {
+    // Finite values whose squares overflow: the store pass names the file,
+    // its first such value and the accepted range, before any Gram matrix
+    // is formed, whatever the transform.
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("merl");
+    synth(&data, 3, "4,4,8", 5);
+    let absurd = data.join("absurd.binary");
+    std::fs::write(&absurd, brdf_atlas_hostile::merl_bytes(4, 4, 8, 1e300)).unwrap();
+    for transform in ["raw", "log", "rel-log"] {
+        let model = dir.path().join("never.atlas");
+        let out = brdf_atlas([
+            Path::new("fit"),
+            &data,
+            Path::new("-o"),
+            &model,
+            Path::new("--transform"),
+            Path::new(transform),
+        ]);
+        let (_, stderr) = texts(&out);
+        assert_eq!(out.status.code(), Some(1), "{transform}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{transform}: {stderr}");
+        assert!(
+            stderr.starts_with(&format!(
+                "error: {}: value 0 (red channel",
+                absurd.display()
+            )) && stderr.contains("beyond any physical one; expected at most 1e8")
+                && !stderr.contains("invalid parameters"),
+            "{transform}: {stderr}"
+        );
+        assert!(!model.exists());
+        assert_eq!(leftovers(dir.path()), Vec::<String>::new());
+    }
+}
+
+#[test]
 fn a_directory_given_as_a_merl_file_is_named() {
     let dir = tempfile::tempdir().unwrap();
     let sub = dir.path().join("a-directory.binary");

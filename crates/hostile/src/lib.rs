@@ -193,6 +193,18 @@ pub fn merl_cases(dir: &Path) -> Vec<Case> {
             "value 383 (blue channel, bin 127) is -inf",
         ),
         bad(
+            "absurd-everywhere.binary",
+            &merl_bytes(4, 4, 8, 1e300),
+            "value 0 (red channel, bin theta_h 0 theta_d 0 phi_d 0) is a reflectance of \
+             6.667e296 per steradian, beyond any physical one; expected at most 1e8",
+        ),
+        bad(
+            "absurd-one.binary",
+            &with(bins + 37, 1e12),
+            "value 165 (green channel, bin theta_h 1 theta_d 0 phi_d 5) is a reflectance \
+             of 7.667e8 per steradian",
+        ),
+        bad(
             "lfs-pointer.binary",
             LFS_POINTER,
             "is a Git LFS pointer file, not MERL data",

@@ -84,6 +84,21 @@ pub enum MerlError {
         /// The offending value.
         value: f64,
     },
+    /// A value is finite but beyond any physical reflectance
+    /// ([`crate::table::MAX_REFLECTANCE`]).
+    #[error("{}: value {index} ({channel} channel, bin theta_h {} theta_d {} phi_d {}) is a reflectance of {reflectance:.3e} per steradian, beyond any physical one; expected at most 1e8 (or a negative value for an unmeasured bin)", path.display(), bin[0], bin[1], bin[2])]
+    Absurd {
+        /// The file.
+        path: PathBuf,
+        /// Flat index of the value (channel-major).
+        index: usize,
+        /// "red", "green" or "blue".
+        channel: &'static str,
+        /// The bin's (theta_h, theta_d, phi_d) indices.
+        bin: [usize; 3],
+        /// The value as a reflectance (1/sr).
+        reflectance: f64,
+    },
     /// The file was truncated or rewritten by another program while it was
     /// mapped: what was read from it cannot be trusted.
     #[error("{}: changed while being read (truncated or rewritten by another program); nothing read from it was used", path.display())]

@@ -52,6 +52,33 @@ pub fn is_non_finite(v: f64) -> bool {
     (v.to_bits() & EXPONENT) == EXPONENT
 }
 
+/// The largest reflectance (1/sr) a MERL file may hold. A perfect mirror
+/// averaged over MERL's finest half-angle bin (theta_h below 0.011 degrees)
+/// reflects about 2e6; measured materials stay below 1e4. A value beyond
+/// 1e8 is no reflectance but a broken file, and its squares and sums over a
+/// table (4.4e22 at most here) stay far from overflowing a double or the
+/// store's single precision, whatever the transform.
+pub const MAX_REFLECTANCE: f64 = 1e8;
+
+/// Raw values above this are beyond [`MAX_REFLECTANCE`] in the channel with
+/// the largest scale (blue), so at or below it no channel's is.
+const RAW_SUSPECT: f64 = MAX_REFLECTANCE / SCALE[2];
+
+/// Might raw value `v` be out of range (not finite, or beyond
+/// [`MAX_REFLECTANCE`] in some channel)? Branch-free like
+/// [`is_non_finite`]; a `true` is settled by [`MerlFile::check_values`].
+#[inline(always)]
+pub fn is_suspect(v: f64) -> bool {
+    is_non_finite(v) | (v > RAW_SUSPECT)
+}
+
+/// Is raw value `v` of `channel` out of range: not finite, or a reflectance
+/// beyond [`MAX_REFLECTANCE`]? (Negative values mark unmeasured bins.)
+#[inline]
+fn out_of_range(channel: usize, v: f64) -> bool {
+    !v.is_finite() || physical(channel, v) > MAX_REFLECTANCE
+}
+
 /// Does a raw value mark an unmeasured sample?
 #[inline]
 pub fn is_invalid(raw: f64) -> bool {
@@ -86,7 +113,7 @@ impl MerlFile {
         let path = path.as_ref().to_path_buf();
         let map = GuardedMap::open(&path, Watch::Path).map_err(|e| MerlError::io(&path, e))?;
         let dims = check_header(&path, &map, map.len() as u64)?;
-        let scanned = scan_values(&path, &map[HEADER_BYTES..]);
+        let scanned = scan_values(&path, dims, &map[HEADER_BYTES..]);
         let file = MerlFile {
             path,
             dims,
@@ -101,7 +128,7 @@ impl MerlFile {
 
     /// Map a MERL file and check its header and size only: for a reader that
     /// streams every value anyway and checks each run with
-    /// [`MerlFile::check_finite`] (a fit's store pass), which saves a whole
+    /// [`MerlFile::check_values`] (a fit's store pass), which saves a whole
     /// pass over the data.
     pub fn map(path: impl AsRef<Path>) -> Result<MerlFile> {
         let path = path.as_ref().to_path_buf();
@@ -131,21 +158,18 @@ impl MerlFile {
     }
 
     /// Check that raw values `start .. start + values.len()` (as read by
-    /// [`MerlFile::copy_raw`]) are finite; the error names the first one that
-    /// is not, as [`MerlFile::open`] would.
-    pub fn check_finite(&self, start: usize, values: &[f64]) -> Result<()> {
-        let non_finite = values
-            .iter()
-            .fold(0u64, |a, v| a | is_non_finite(*v) as u64);
-        if non_finite == 0 {
+    /// [`MerlFile::copy_raw`]) are finite and within [`MAX_REFLECTANCE`];
+    /// the error names the first one that is not, as [`MerlFile::open`]
+    /// would.
+    pub fn check_values(&self, start: usize, values: &[f64]) -> Result<()> {
+        let suspect = values.iter().fold(0u64, |a, v| a | is_suspect(*v) as u64);
+        if suspect == 0 {
             return Ok(());
         }
-        Err(first_non_finite(
-            &self.path,
-            self.dims.bins(),
-            start,
-            values.iter().copied(),
-        ))
+        match first_out_of_range(&self.path, self.dims, start, values.iter().copied()) {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
     }
 
     /// The file this was read from.
@@ -255,29 +279,27 @@ fn check_header(path: &Path, bytes: &[u8], len: u64) -> Result<Dims> {
     Ok(dims)
 }
 
-/// Check every value is finite; count the negative (unmeasured) ones per channel.
-fn scan_values(path: &Path, data: &[u8]) -> Result<[usize; 3]> {
+/// Check every value is finite and within [`MAX_REFLECTANCE`]; count the
+/// negative (unmeasured) ones per channel.
+fn scan_values(path: &Path, dims: Dims, data: &[u8]) -> Result<[usize; 3]> {
     let per_channel = data.len() / 24;
     let mut invalid = [0usize; 3];
     for (channel, block) in data.chunks_exact(8 * per_channel).enumerate() {
         // A branch-free pass (vectorises): count the negatives and see whether
-        // any exponent field is all ones (inf or NaN); find it only if so.
-        let (mut negative, mut non_finite) = (0usize, 0u64);
+        // any value may be out of range; find it only if so.
+        let (mut negative, mut suspect) = (0usize, 0u64);
         for b in block.chunks_exact(8) {
-            let bits = u64::from_le_bytes(b.try_into().expect("8 bytes"));
-            negative += is_invalid(f64::from_bits(bits)) as usize;
-            non_finite |= is_non_finite(f64::from_bits(bits)) as u64;
+            let v = f64::from_le_bytes(b.try_into().expect("8 bytes"));
+            negative += is_invalid(v) as usize;
+            suspect |= is_suspect(v) as u64;
         }
-        if non_finite != 0 {
+        if suspect != 0 {
             let values = block
                 .chunks_exact(8)
                 .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")));
-            return Err(first_non_finite(
-                path,
-                per_channel,
-                channel * per_channel,
-                values,
-            ));
+            if let Some(e) = first_out_of_range(path, dims, channel * per_channel, values) {
+                return Err(e);
+            }
         }
         invalid[channel] = negative;
     }
@@ -287,26 +309,42 @@ fn scan_values(path: &Path, data: &[u8]) -> Result<[usize; 3]> {
 /// The exponent field of an f64: all ones for infinities and NaNs.
 const EXPONENT: u64 = 0x7ff0_0000_0000_0000;
 
-/// The error for the first non-finite value of `values`, which start at flat
-/// index `start` of a file with `bins` bins a channel (there must be one).
-fn first_non_finite(
+/// The error for the first out-of-range value of `values`, which start at
+/// flat index `start` of a file of `dims`, if there is one.
+fn first_out_of_range(
     path: &Path,
-    bins: usize,
+    dims: Dims,
     start: usize,
     values: impl Iterator<Item = f64>,
-) -> MerlError {
-    let (k, value) = values
+) -> Option<MerlError> {
+    let bins = dims.bins();
+    let (index, value) = values
         .enumerate()
-        .find(|(_, v)| !v.is_finite())
-        .expect("a non-finite value was seen");
-    let index = start + k;
-    MerlError::NonFinite {
-        path: path.to_path_buf(),
-        index,
-        channel: CHANNELS[index / bins],
-        bin: index % bins,
-        value,
-    }
+        .map(|(k, v)| (start + k, v))
+        .find(|&(index, v)| out_of_range(index / bins, v))?;
+    let (path, channel, bin) = (path.to_path_buf(), index / bins, index % bins);
+    let name = CHANNELS[channel];
+    Some(if value.is_finite() {
+        let (theta_h, rest) = (
+            bin / (dims.theta_d * dims.phi_d),
+            bin % (dims.theta_d * dims.phi_d),
+        );
+        MerlError::Absurd {
+            path,
+            index,
+            channel: name,
+            bin: [theta_h, rest / dims.phi_d, rest % dims.phi_d],
+            reflectance: physical(channel, value),
+        }
+    } else {
+        MerlError::NonFinite {
+            path,
+            index,
+            channel: name,
+            bin,
+            value,
+        }
+    })
 }
 
 /// A MERL table in memory, values in raw file units.
@@ -370,7 +408,7 @@ impl MerlTable {
         let path = path.as_ref();
         let dims = check_header(path, bytes, bytes.len() as u64)?;
         let data = &bytes[HEADER_BYTES..];
-        scan_values(path, data)?;
+        scan_values(path, dims, data)?;
         let values = data
             .chunks_exact(8)
             .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")))
@@ -607,6 +645,17 @@ mod tests {
                 },
                 "is inf",
             ),
+            (
+                {
+                    let mut b = bytes.clone();
+                    let o = 12 + 8 * (2 * 72 + 13);
+                    b[o..o + 8].copy_from_slice(&1e300f64.to_le_bytes());
+                    write_bytes(d, "absurd.binary", &b)
+                },
+                "value 157 (blue channel, bin theta_h 0 theta_d 2 phi_d 1) is a \
+                 reflectance of 1.107e297 per steradian, beyond any physical one; \
+                 expected at most 1e8",
+            ),
         ];
         for (path, want) in cases {
             let err = MerlFile::open(&path).unwrap_err().to_string();
@@ -625,7 +674,7 @@ mod tests {
                         .find_map(|start| {
                             let run = &mut run[..7.min(f.dims().values() - start)];
                             f.copy_raw(start, run);
-                            f.check_finite(start, run).err()
+                            f.check_values(start, run).err()
                         })
                         .expect("an error")
                         .to_string()
@@ -637,6 +686,35 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(missing.contains("missing.binary"), "{missing}");
+    }
+
+    #[test]
+    fn the_reflectance_limit_is_per_channel() {
+        // Raw 1e11 is 6.7e7 per steradian in red (accepted) but 1.1e8 in
+        // blue (refused): the cheap raw test flags both, the exact one
+        // keeps the red.
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("bright.binary");
+        let mut t = small();
+        let bins = t.dims().bins();
+        t.raw_mut()[3] = 1e11;
+        t.write(&p).unwrap();
+        let f = MerlFile::open(&p).unwrap();
+        assert_eq!(f.raw(3), 1e11);
+        assert!(physical(0, 1e11) < MAX_REFLECTANCE && is_suspect(1e11));
+        let lazy = MerlFile::map(&p).unwrap();
+        assert!(lazy.check_values(0, &t.raw()[..bins]).is_ok());
+        t.raw_mut()[2 * bins + 3] = 1e11;
+        t.write(&p).unwrap();
+        let err = MerlFile::open(&p).unwrap_err().to_string();
+        assert!(
+            err.contains("blue channel") && err.contains("1.107e8"),
+            "{err}"
+        );
+        assert!(
+            err.contains("bright.binary") && !err.contains('\n'),
+            "{err}"
+        );
     }
 
     #[test]

@@ -7,7 +7,7 @@ use std::path::Path;
 use std::sync::Mutex;
 
 use brdf_atomic::PendingFile;
-use brdf_merl::table::{is_invalid, is_non_finite};
+use brdf_merl::table::{is_invalid, is_suspect};
 use faer::Mat;
 
 use crate::data::transform::TransformKind;
@@ -243,8 +243,8 @@ impl PassScratch {
 
 /// One material's run in a block of the store pass: count its measured
 /// values into `measured`, add its transformed values `col` into `mean`,
-/// and say whether any raw value is not finite (the caller then finds and
-/// names it). One loop, vectorised (AVX2 where the CPU has it; the same
+/// and say whether any raw value may be out of range (the caller then
+/// finds and names it). One loop, vectorised (AVX2 where the CPU has it; the same
 /// bits either way: additions of the same values in the same order).
 fn tally(raw: &[f64], col: &[f64], measured: &mut [f64], mean: &mut [f64]) -> bool {
     #[cfg(target_arch = "x86_64")]
@@ -257,13 +257,13 @@ fn tally(raw: &[f64], col: &[f64], measured: &mut [f64], mean: &mut [f64]) -> bo
 
 #[inline(always)]
 fn tally_portable(raw: &[f64], col: &[f64], measured: &mut [f64], mean: &mut [f64]) -> bool {
-    let mut non_finite = 0u64;
+    let mut suspect = 0u64;
     for (((v, t), c), m) in raw.iter().zip(col).zip(measured).zip(mean) {
-        non_finite |= is_non_finite(*v) as u64;
+        suspect |= is_suspect(*v) as u64;
         *c += if is_invalid(*v) { 0.0 } else { 1.0 };
         *m += t;
     }
-    non_finite != 0
+    suspect != 0
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -325,8 +325,9 @@ pub fn build_store(
             {
                 f.copy_raw(r0, &mut s.raw);
                 t.forward_raw_rows(bins, r0, &s.raw, col);
-                if tally(&s.raw, col, &mut s.measured, &mut s.mean) {
-                    let e = f.check_finite(r0, &s.raw).expect_err("a non-finite value");
+                if tally(&s.raw, col, &mut s.measured, &mut s.mean)
+                    && let Err(e) = f.check_values(r0, &s.raw)
+                {
                     let mut first = bad_value.lock().expect("no panics while locked");
                     if first.as_ref().is_none_or(|(at, _)| (m, r0) < *at) {
                         *first = Some(((m, r0), e.into()));
