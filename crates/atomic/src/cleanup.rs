@@ -77,6 +77,29 @@ pub(crate) fn create_temp<T>(
     Ok((tmp, made))
 }
 
+/// Run `open` on `path`'s directory to make an unnamed temporary there
+/// (`O_TMPFILE`), after sweeping the directory as [`create_temp`] does, and
+/// unless an interrupt has closed the registry. Nothing is registered: an
+/// unnamed file needs no removal, it goes with its last descriptor.
+pub(crate) fn create_unnamed<T>(
+    path: &Path,
+    open: impl FnOnce(&Path) -> io::Result<Option<T>>,
+) -> io::Result<Option<T>> {
+    let mut reg = registry();
+    if reg.closed {
+        return Err(interrupted());
+    }
+    sweep_locked(&mut reg, path);
+    open(&dir_of(path))
+}
+
+fn dir_of(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
 /// A temporary path in the same directory as `path` (so the final rename
 /// never crosses file systems), unique within this process and registered
 /// for removal on an interrupt ([`remove_temporaries`]). Named
@@ -164,10 +187,7 @@ pub fn sweep(path: &Path) {
 }
 
 fn sweep_locked(reg: &mut Registry, path: &Path) {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
+    let dir = dir_of(path);
     if reg.swept.contains(&dir) {
         return;
     }

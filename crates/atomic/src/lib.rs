@@ -1,12 +1,22 @@
-//! Atomic file output for brdf-atlas: write a temporary file beside the target, sync it,
-//! then rename it over the target. A failed or interrupted write leaves the
-//! old file (if any) untouched and no partial file behind.
+//! Atomic file output for brdf-atlas: write a temporary file beside the
+//! target, sync it, then rename it over the target. A failed or interrupted
+//! write leaves the old file (if any) untouched and no partial file behind.
 //!
 //! # Nothing left behind
 //!
-//! Temporaries are named files (`.{name}.tmp-{pid}-{n}`, beside the target)
-//! that a process-wide list keeps track of ([`temp_path_for`]), with two ways
-//! out besides their own commit or drop:
+//! Files are written without a name where the file system allows
+//! (`O_TMPFILE`, Linux 3.11 and ext4, XFS, Btrfs, tmpfs among others): a
+//! [`PendingFile`] is linked under a temporary name beside its target only
+//! as it is put in place, and renamed over the target at once, so a process
+//! killed while it writes (SIGKILL, the out-of-memory killer, a crash)
+//! leaves nothing at all.
+//!
+//! What cannot be unnamed has a name (`.{name}.tmp-{pid}-{n}`, beside the
+//! target) that a process-wide list keeps track of ([`temp_path_for`]): the
+//! directories a report is built in ([`StagedDir`]), files on a file system
+//! without `O_TMPFILE`, and the instant between a commit's link and its
+//! rename. For those there are two ways out besides their own commit or
+//! drop:
 //!
 //! - an interrupt the program can catch (SIGINT, SIGTERM): the program waits
 //!   for the signal on an ordinary thread and calls [`remove_temporaries`],
@@ -14,19 +24,9 @@
 //!   of one commit happen whole or not at all), removes every temporary and
 //!   stops all further commits, so the program exits with the old outputs
 //!   untouched, or the complete new ones if it had finished;
-//! - a kill nobody can catch (SIGKILL, a crash, a power loss): the next run
-//!   that writes into the same directory removes the temporaries of
-//!   processes that no longer exist ([`sweep`]).
-//!
-//! Why not unnamed files (`O_TMPFILE`, linked in by `linkat` on commit)?
-//! They would vanish with the process by themselves, but only files can be
-//! unnamed and only on some file systems: a report is a directory built
-//! under a temporary name, a fit's store goes in by an exchange
-//! (`renameat2(RENAME_EXCHANGE)`, see [`swap_in`]) which needs both files
-//! named and leaves the old one under the temporary name until the model is
-//! in place, and a store on a file system without `O_TMPFILE` still needs
-//! a name. Each of these still needs the list and the sweep, so names
-//! everywhere, with one mechanism, is simpler and covers every case.
+//! - a kill nobody can catch: the next run that writes into the same
+//!   directory removes the temporaries of processes that no longer exist
+//!   ([`sweep`]).
 //!
 //! ```
 //! let dir = tempfile::tempdir()?;
@@ -41,13 +41,14 @@
 #![warn(missing_docs)]
 
 mod cleanup;
+mod unnamed;
 
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 pub use cleanup::{committed, critical, remove_temporaries, sweep, temp_path_for};
-use cleanup::{create_temp, forget, mark_committed};
+use cleanup::{create_temp, create_unnamed, forget, mark_committed};
 
 /// Write `path` atomically: `fill` writes the whole content into a buffered
 /// temporary file, which is then synced and renamed over `path`.
@@ -55,25 +56,12 @@ pub fn write_atomic<F>(path: &Path, fill: F) -> io::Result<()>
 where
     F: FnOnce(&mut BufWriter<File>) -> io::Result<()>,
 {
-    let (tmp, file) = create_temp(path, |p| File::create(p))?;
-    let result = (|| {
-        let mut w = BufWriter::with_capacity(1 << 20, file);
-        fill(&mut w)?;
-        w.flush()?;
-        let file = w.into_inner().map_err(|e| e.into_error())?;
-        file.sync_all()?;
-        drop(file);
-        critical(|| {
-            std::fs::rename(&tmp, path)?;
-            mark_committed(path);
-            Ok(())
-        })
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    forget(&tmp);
-    result
+    let pending = PendingFile::create(path)?;
+    let mut w = BufWriter::with_capacity(1 << 20, pending.file().try_clone()?);
+    fill(&mut w)?;
+    w.flush()?;
+    drop(w);
+    pending.commit(true)
 }
 
 /// Write `fill`'s content to a temporary file beside `path` and sync it, but
@@ -200,18 +188,33 @@ pub fn evict_cached(path: &Path) {
     let _ = path;
 }
 
-/// A file being written in place under a temporary name, for writers that
-/// need random access (positioned writes from several threads). Dropped
-/// without [`PendingFile::commit`], it removes itself.
+/// A file being written beside its target, for writers that need random
+/// access (positioned writes from several threads). Unnamed while it is
+/// written where the file system allows (`O_TMPFILE`), so a killed process
+/// leaves nothing; else under a registered temporary name. Dropped without
+/// [`PendingFile::commit`], it removes itself.
 pub struct PendingFile {
-    tmp: PathBuf,
+    /// The temporary's name: `None` while the file has none.
+    tmp: Option<PathBuf>,
     target: PathBuf,
     file: Option<File>,
+    /// Put in place or handed over ([`PendingFile::into_named`]): not
+    /// removed on drop.
+    done: bool,
 }
 
 impl PendingFile {
-    /// Create the temporary file for `target`.
+    /// Create the temporary file for `target`: unnamed where the file
+    /// system allows, else named (`.{name}.tmp-{pid}-{n}`).
     pub fn create(target: &Path) -> io::Result<PendingFile> {
+        if let Some(file) = create_unnamed(target, unnamed::open_unnamed)? {
+            return Ok(PendingFile {
+                tmp: None,
+                target: target.to_path_buf(),
+                file: Some(file),
+                done: false,
+            });
+        }
         let (tmp, file) = create_temp(target, |tmp| {
             File::options()
                 .read(true)
@@ -220,10 +223,16 @@ impl PendingFile {
                 .open(tmp)
         })?;
         Ok(PendingFile {
-            tmp,
+            tmp: Some(tmp),
             target: target.to_path_buf(),
             file: Some(file),
+            done: false,
         })
+    }
+
+    /// Does the file have no name yet (`O_TMPFILE`)?
+    pub fn is_unnamed(&self) -> bool {
+        self.tmp.is_none()
     }
 
     /// Size the file to `len` bytes and reserve its disk blocks up front
@@ -260,31 +269,82 @@ impl PendingFile {
         self.file.as_ref().expect("file present until commit")
     }
 
+    /// The temporary's name, given now if it has none: a registered
+    /// temporary beside the target.
+    fn named(&mut self) -> io::Result<PathBuf> {
+        if let Some(tmp) = &self.tmp {
+            return Ok(tmp.clone());
+        }
+        let file = self.file.as_ref().expect("file present until commit");
+        let (tmp, ()) = create_temp(&self.target, |tmp| unnamed::link(file, tmp))?;
+        self.tmp = Some(tmp.clone());
+        Ok(tmp)
+    }
+
     /// Rename over the target; with `sync`, flush the data to disk first.
+    /// An unnamed file is first linked under a temporary name beside the
+    /// target, then renamed: the name exists only inside the commit.
     ///
     /// Without `sync` the rename is still atomic for every reader, but a
     /// power loss may leave a truncated file: right for large derived data
     /// that carries its own checksum (a store), not for a user's only copy.
     pub fn commit(mut self, sync: bool) -> io::Result<()> {
-        let file = self.file.take().expect("file present until commit");
         if sync {
-            file.sync_all()?;
+            self.file().sync_all()?;
         }
-        drop(file);
-        critical(|| std::fs::rename(&self.tmp, &self.target))?;
+        critical(|| {
+            stop_before_commit();
+            let tmp = self.named()?;
+            std::fs::rename(&tmp, &self.target)?;
+            self.done = true;
+            forget(&tmp);
+            Ok::<_, io::Error>(())
+        })?;
         mark_committed(&self.target);
-        forget(&self.tmp);
-        self.tmp = PathBuf::new();
         Ok(())
+    }
+
+    /// Give the file its temporary name (if it has none) and hand that name
+    /// over: the file is no longer removed on drop, and the caller puts it
+    /// in place or removes it. The name stays registered, so an interrupt
+    /// still removes it. For a file that goes in by [`swap_in`]; call it
+    /// inside [`critical`], just before.
+    pub fn into_named(mut self) -> io::Result<PathBuf> {
+        stop_before_commit();
+        let tmp = self.named()?;
+        self.done = true;
+        Ok(tmp)
+    }
+}
+
+/// For the tests of killed runs: with `BRDF_ATLAS_TEST_STOP_IN=commit` in
+/// its environment the process stops itself (SIGSTOP), once, as its first
+/// output is about to be named and put in place: every byte of it written,
+/// nothing in place. A test then kills it at that moment, not after a guess
+/// at a delay. (The command-line tool's progress stops at its phases on the
+/// same variable.)
+fn stop_before_commit() {
+    #[cfg(unix)]
+    {
+        use std::sync::atomic::{AtomicBool, Ordering};
+        static DONE: AtomicBool = AtomicBool::new(false);
+        if std::env::var_os("BRDF_ATLAS_TEST_STOP_IN").is_some_and(|p| p == "commit")
+            && !DONE.swap(true, Ordering::SeqCst)
+        {
+            // SAFETY: raise has no memory-safety preconditions.
+            unsafe { libc::raise(libc::SIGSTOP) };
+        }
     }
 }
 
 impl Drop for PendingFile {
     fn drop(&mut self) {
-        if !self.tmp.as_os_str().is_empty() {
-            self.file.take();
-            let _ = std::fs::remove_file(&self.tmp);
-            forget(&self.tmp);
+        self.file.take();
+        if !self.done
+            && let Some(tmp) = &self.tmp
+        {
+            let _ = std::fs::remove_file(tmp);
+            forget(tmp);
         }
     }
 }
@@ -330,6 +390,7 @@ impl StagedDir {
     /// removed. The error names the path that failed.
     pub fn commit(mut self) -> Result<(), (PathBuf, io::Error)> {
         critical(|| {
+            stop_before_commit();
             match swap_in(&self.dir, &self.target) {
                 Ok(Swapped::Exchanged) => {
                     self.committed = true;
@@ -430,6 +491,116 @@ mod tests {
         p.commit(true).unwrap();
         assert_eq!(std::fs::metadata(&path).unwrap().len(), 10);
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    /// Does the file system of `dir` make unnamed files? (ext4, XFS, Btrfs
+    /// and tmpfs do: the machines this is tested on.)
+    fn makes_unnamed(dir: &Path) -> bool {
+        unnamed::open_unnamed(dir).unwrap().is_some()
+    }
+
+    /// Are the tests run where temporary files cannot be unnamed (set
+    /// `BRDF_ATOMIC_NAMED_ONLY=1`), so that the unnamed cases are skipped
+    /// by request rather than passing silently?
+    fn named_only() -> bool {
+        !cfg!(target_os = "linux") || std::env::var_os("BRDF_ATOMIC_NAMED_ONLY").is_some()
+    }
+
+    #[test]
+    fn an_unnamed_file_has_no_name_until_it_is_in_place() {
+        let dir = tempfile::tempdir().unwrap();
+        if !makes_unnamed(dir.path()) {
+            assert!(named_only(), "{} has no O_TMPFILE", dir.path().display());
+            return;
+        }
+        let path = dir.path().join("out.bin");
+        let p = PendingFile::create(&path).unwrap();
+        assert!(p.is_unnamed());
+        p.file().write_all(b"abc").unwrap();
+        // Written, and nothing in the directory.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+        p.commit(false).unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"abc");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        // A new file's mode, as File::create gives one (the umask applies).
+        use std::os::unix::fs::PermissionsExt;
+        let plain = dir.path().join("plain");
+        File::create(&plain).unwrap();
+        let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode(&path), mode(&plain));
+        // Dropped unnamed: nothing to remove, nothing there.
+        {
+            let p = PendingFile::create(&dir.path().join("never")).unwrap();
+            p.file().write_all(b"x").unwrap();
+        }
+        assert!(!dir.path().join("never").exists());
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+        // Handed over by name: the caller's to move, not removed on drop.
+        let p = PendingFile::create(&dir.path().join("swap")).unwrap();
+        p.file().write_all(b"new").unwrap();
+        let named = critical(|| p.into_named()).unwrap();
+        assert_eq!(std::fs::read(&named).unwrap(), b"new");
+        assert_eq!(swap_in(&named, &path).unwrap(), Swapped::Exchanged);
+        assert_eq!(std::fs::read(&named).unwrap(), b"abc");
+        std::fs::remove_file(&named).unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"new");
+    }
+
+    #[test]
+    fn a_killed_writer_leaves_its_directory_as_it_was() {
+        // A child process writes an unnamed file and is killed (SIGKILL)
+        // before it commits: the directory is as before, hidden files
+        // included. The child is this test binary, run again.
+        if let Some(dir) = std::env::var_os("BRDF_ATOMIC_KILLED_CHILD") {
+            let p = PendingFile::create(&Path::new(&dir).join("out.bin")).unwrap();
+            p.allocate(1 << 20).unwrap();
+            println!("writing");
+            std::io::stdout().flush().unwrap();
+            std::thread::sleep(std::time::Duration::from_secs(60));
+            unreachable!("killed before");
+        }
+        let dir = tempfile::tempdir().unwrap();
+        if !makes_unnamed(dir.path()) {
+            assert!(named_only(), "{} has no O_TMPFILE", dir.path().display());
+            return;
+        }
+        std::fs::write(dir.path().join(".hidden"), b"mine").unwrap();
+        let before = listing(dir.path());
+        let mut child = std::process::Command::new(std::env::current_exe().unwrap())
+            .args([
+                "--exact",
+                "tests::a_killed_writer_leaves_its_directory_as_it_was",
+                "--nocapture",
+            ])
+            .env("BRDF_ATOMIC_KILLED_CHILD", dir.path())
+            .stdout(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Wait until the child says it is writing, then kill it.
+        let mut out = std::io::BufReader::new(child.stdout.take().unwrap());
+        let mut line = String::new();
+        while !line.contains("writing") {
+            line.clear();
+            assert!(std::io::BufRead::read_line(&mut out, &mut line).unwrap() > 0);
+        }
+        child.kill().unwrap();
+        let status = child.wait().unwrap();
+        use std::os::unix::process::ExitStatusExt;
+        assert_eq!(status.signal(), Some(libc::SIGKILL), "killed mid-write");
+        assert_eq!(listing(dir.path()), before);
+    }
+
+    fn listing(dir: &Path) -> Vec<(String, u64)> {
+        let mut v: Vec<(String, u64)> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| {
+                let e = e.unwrap();
+                let len = e.metadata().unwrap().len();
+                (e.file_name().to_string_lossy().into_owned(), len)
+            })
+            .collect();
+        v.sort();
+        v
     }
 
     #[test]

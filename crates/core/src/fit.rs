@@ -8,7 +8,8 @@ use std::time::{Duration, Instant};
 
 use brdf_atomic::{Swapped, stage, swap_in};
 
-use crate::data::{Dataset, Precision, Store, TransformKind, build_store};
+use crate::data::store::build_unnamed;
+use crate::data::{Dataset, Precision, Store, TransformKind};
 use crate::error::{CoreError, Result};
 use crate::eval::fidelity::Fidelity;
 use crate::gplvm::Kernel;
@@ -147,36 +148,17 @@ pub fn fit_dir_with(
     let scan_time = t0.elapsed();
     let t1 = Instant::now();
     let store_path = store_path_for(model);
-    // The store is built under a temporary name and takes its place only
-    // once the fit has succeeded: a failed re-fit leaves the old pair intact.
-    let staging = brdf_atomic::temp_path_for(&store_path);
-    let result = fit_staged(
+    fit_staged(
         &data,
         model,
         options,
         policy,
         progress,
         &store_path,
-        &staging,
         scan_time,
         t1,
         &private,
-    );
-    if result.is_err() {
-        let _ = std::fs::remove_file(&staging);
-    }
-    // Name the store, not its temporary name, in errors.
-    result.map_err(|e| match e {
-        CoreError::Write { path, source } if path == staging => CoreError::Write {
-            path: store_path,
-            source,
-        },
-        CoreError::Io { path, source } if path == staging => CoreError::Io {
-            path: store_path,
-            source,
-        },
-        e => e,
-    })
+    )
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -187,7 +169,6 @@ fn fit_staged(
     policy: StorePolicy,
     progress: &dyn Progress,
     store_path: &Path,
-    staging: &Path,
     scan_time: Duration,
     t1: Instant,
     private: &PrivatePeak,
@@ -198,17 +179,20 @@ fn fit_staged(
         StorePolicy::Rebuild => None,
     };
     let store_reused = reused.is_some();
-    let (store, y, old_ref) = match reused {
-        Some((store, y, old_ref)) => (store, y, Some(old_ref)),
+    // A new store is written without a name (where the file system
+    // allows) and takes its place only once the fit has succeeded: a failed
+    // or killed re-fit leaves the old pair intact and nothing beside it.
+    let (store, y, old_ref, pending) = match reused {
+        Some((store, y, old_ref)) => (store, y, Some(old_ref), None),
         None => {
-            let (store, y) = build_store(
+            let (store, y, pending) = build_unnamed(
                 data,
                 options.transform,
                 options.precision,
-                staging,
+                store_path,
                 progress,
             )?;
-            (store, y, None)
+            (store, y, None, Some(pending))
         }
     };
     let store_time = t1.elapsed();
@@ -270,31 +254,41 @@ fn fit_staged(
             std::io::Error::new(std::io::ErrorKind::IsADirectory, "is a directory"),
         ));
     }
-    if store_reused {
+    match pending {
         // The store stays where it is: only the model changes.
-        brdf_atomic::critical(|| staged.commit(false)).map_err(|e| CoreError::write(model, e))?;
-    } else {
-        // The store goes in by an exchange, so the old one (if any) is still
-        // at hand until the model, the commit point, is in place. An
+        None => brdf_atomic::critical(|| staged.commit(false))
+            .map_err(|e| CoreError::write(model, e))?,
+        // The store goes in by an exchange, so the old one (if any) is
+        // still at hand until the model, the commit point, is in place. An
         // interrupt waits for the pair (`critical`), so it never sees one
         // without the other.
-        let swapped = brdf_atomic::critical(|| {
-            let swapped =
-                swap_in(staging, store_path).map_err(|e| CoreError::write(store_path, e))?;
-            if let Err(e) = staged.commit(false) {
-                if swapped == Swapped::Exchanged {
-                    // Undo: the old store back beside the old model. Best
-                    // effort; the commit's error is the one to report.
-                    let _ = swap_in(staging, store_path);
+        Some(pending) => {
+            let (swapped, staging) = brdf_atomic::critical(|| {
+                let staging = pending
+                    .into_named()
+                    .map_err(|e| CoreError::write(store_path, e))?;
+                let swapped = swap_in(&staging, store_path).map_err(|e| {
+                    let _ = std::fs::remove_file(&staging);
+                    CoreError::write(store_path, e)
+                })?;
+                if let Err(e) = staged.commit(false) {
+                    if swapped == Swapped::Exchanged {
+                        // Undo: the old store back beside the old model.
+                        // Best effort; the commit's error is the one to
+                        // report.
+                        let _ = swap_in(&staging, store_path);
+                    }
+                    let _ = std::fs::remove_file(&staging);
+                    return Err(CoreError::write(model, e));
                 }
-                return Err(CoreError::write(model, e));
+                Ok((swapped, staging))
+            })?;
+            if swapped == Swapped::Exchanged {
+                // The old store. Freeing its cached pages is most of the
+                // time a re-fit spends saving; failing to remove it loses
+                // nothing.
+                let _ = std::fs::remove_file(staging);
             }
-            Ok(swapped)
-        })?;
-        if swapped == Swapped::Exchanged {
-            // The old store. Freeing its cached pages is most of the time a
-            // re-fit spends saving; failing to remove it loses nothing.
-            let _ = std::fs::remove_file(staging);
         }
     }
     // From the end of the optimisation (the checksum's join among it), less

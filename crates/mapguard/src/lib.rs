@@ -107,6 +107,23 @@ impl GuardedMap {
     /// Open and map the file at `path`, read-only.
     pub fn open(path: &Path, watch: Watch) -> io::Result<GuardedMap> {
         let file = open_regular(path)?;
+        Self::map_file(file, path, watch)
+    }
+
+    /// Map an open file, read-only, watched by its descriptor; `path` names
+    /// it in messages (a file written without a name, `O_TMPFILE`, is
+    /// mapped this way before it takes its place at `path`).
+    pub fn from_file(file: File, path: &Path) -> io::Result<GuardedMap> {
+        if !file.metadata()?.is_file() {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                "is not a regular file",
+            ));
+        }
+        Self::map_file(file, path, Watch::Descriptor)
+    }
+
+    fn map_file(file: File, path: &Path, watch: Watch) -> io::Result<GuardedMap> {
         let seen = Stamp::of(&file.metadata()?);
         #[cfg(target_os = "linux")]
         handler::install();

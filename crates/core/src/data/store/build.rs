@@ -285,6 +285,23 @@ pub fn build_store(
     out: &Path,
     progress: &dyn Progress,
 ) -> Result<(Store, Mat<f64>)> {
+    let (store, y, pending) = build_unnamed(data, transform, precision, out, progress)?;
+    pending
+        .commit(false)
+        .map_err(|e| CoreError::write(out, e))?;
+    Ok((store, y))
+}
+
+/// [`build_store`], but not put in place: the store is mapped from the file
+/// as written (unnamed where the file system allows), and the returned
+/// [`PendingFile`] puts it at `out` (which names it in errors meanwhile).
+pub(crate) fn build_unnamed(
+    data: &Dataset,
+    transform: TransformKind,
+    precision: Precision,
+    out: &Path,
+    progress: &dyn Progress,
+) -> Result<(Store, Mat<f64>, PendingFile)> {
     let dims = data.dims();
     let n = data.len();
     let bins = dims.bins();
@@ -394,10 +411,9 @@ pub fn build_store(
     let written = std::time::SystemTime::now() - std::time::Duration::from_secs(1);
     file.set_modified(written)
         .map_err(|e| CoreError::write(out, e))?;
-    pending
-        .commit(false)
-        .map_err(|e| CoreError::write(out, e))?;
-    Ok((Store::open(out)?, y))
+    let mapped = file.try_clone().map_err(|e| CoreError::io(out, e))?;
+    let store = Store::from_file(mapped, out)?;
+    Ok((store, y, pending))
 }
 
 #[cfg(test)]

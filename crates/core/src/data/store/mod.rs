@@ -44,6 +44,7 @@ use crate::progress::Progress;
 mod build;
 
 pub use build::build_store;
+pub(crate) use build::build_unnamed;
 use build::gram_fold;
 
 use crate::dense::gram::syrk_lower_add;
@@ -183,6 +184,17 @@ impl Store {
         let path = path.as_ref().to_path_buf();
         let map =
             GuardedMap::open(&path, Watch::Descriptor).map_err(|e| CoreError::io(&path, e))?;
+        Self::from_map(map, path)
+    }
+
+    /// [`Store::open`] of an open file (one still without a name, as
+    /// [`crate::fit_dir`] builds it); `path` names it in messages.
+    pub(crate) fn from_file(file: std::fs::File, path: &Path) -> Result<Store> {
+        let map = GuardedMap::from_file(file, path).map_err(|e| CoreError::io(path, e))?;
+        Self::from_map(map, path.to_path_buf())
+    }
+
+    fn from_map(map: GuardedMap, path: PathBuf) -> Result<Store> {
         let bad = |why: String| CoreError::bad_file(&path, why);
         if brdf_merl::table::is_lfs_pointer(&map) {
             return Err(bad(
