@@ -1,9 +1,14 @@
 //! Interrupted runs leave nothing behind: the real binary is stopped by
-//! SIGINT, SIGTERM or SIGKILL at several moments (the store pass, the
-//! search, the save, the commit, or after it finished: all are valid), and
-//! the output directory, hidden files included, must be exactly as before
-//! (or exactly the complete new output). After a SIGKILL it is so once the
-//! next run into that directory has finished.
+//! SIGINT, SIGTERM or SIGKILL, and the output directory, hidden files
+//! included, must be exactly as before (or exactly the complete new
+//! output). Each test signals the run at known moments first: the run stops
+//! itself there (`BRDF_ATLAS_TEST_STOP_IN`: a phase of the work, or
+//! `commit`, as its outputs are about to go in), the signal is sent while
+//! it is stopped, and it goes on, so the signal certainly arrives before the
+//! work is done and the run must say it was interrupted. Then the same at
+//! delays (the store pass, the search, the save, or after it finished: all
+//! are valid), for the moments between. After a SIGKILL the directory is
+//! as before once the next run into it has finished.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -101,6 +106,82 @@ fn interrupt(child: Child, delay: Duration, signal: libc::c_int) -> (Option<i32>
     )
 }
 
+/// Is process `pid` stopped (state `T` in `/proc/PID/stat`)?
+fn stopped(pid: u32) -> bool {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
+    stat.rsplit_once(") ")
+        .is_some_and(|(_, rest)| rest.starts_with('T'))
+}
+
+/// Run `args` until it stops itself at `phase`, send `signal` while it is
+/// stopped, then let it go on: the exit code and stderr. Panics if the run
+/// ends before it reaches the phase (the signal would come too late).
+fn interrupt_at(args: &[&str], phase: &str, signal: libc::c_int) -> (Option<i32>, String) {
+    let child = Command::new(BIN)
+        .args(args)
+        .env("BRDF_ATLAS_TEST_STOP_IN", phase)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let pid = libc::pid_t::try_from(child.id()).unwrap();
+    let start = std::time::Instant::now();
+    while !stopped(child.id()) {
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "{args:?} never stopped in {phase}"
+        );
+        // A child that ended is a zombie until waited for: state Z, never T.
+        let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
+        assert!(
+            !stat
+                .rsplit_once(") ")
+                .is_some_and(|(_, r)| r.starts_with('Z')),
+            "{args:?} ended before it reached {phase}"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    // SAFETY: our own child, stopped and not yet waited for.
+    unsafe {
+        libc::kill(pid, signal);
+        libc::kill(pid, libc::SIGCONT);
+    }
+    let out = child.wait_with_output().unwrap();
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// Signalled at `phase` (see [`interrupt_at`]): the run must say it was
+/// interrupted, and leave `before` (or, signalled as its outputs went in,
+/// exactly `complete`).
+#[allow(clippy::too_many_arguments)]
+fn check_interrupted_at(
+    args: &[&str],
+    phase: &str,
+    signal: libc::c_int,
+    expected_code: i32,
+    dir: &Path,
+    before: &BTreeMap<String, (u64, u64)>,
+    complete: &BTreeMap<String, (u64, u64)>,
+) {
+    let (code, stderr) = interrupt_at(args, phase, signal);
+    let what = format!("{} signalled in {phase}", args[0]);
+    if phase == "commit" {
+        // The outputs go in whole first; the run may then end before the
+        // signal is handled, which is right too: all of it is in place.
+        assert!(
+            matches!(code, Some(0)) || code == Some(expected_code),
+            "{what}: {stderr}"
+        );
+        assert!(!stderr.contains("nothing was changed"), "{what}: {stderr}");
+    } else {
+        assert_eq!(code, Some(expected_code), "{what}: {stderr}");
+    }
+    check_interrupted(&what, code, &stderr, expected_code, dir, before, complete);
+}
+
 /// After an interrupt: either it finished first (exit 0, complete output)
 /// or it was stopped with one line and the listing is exactly `before`.
 fn check_interrupted(
@@ -156,6 +237,15 @@ fn fit_interrupted_by_sigint_or_sigterm_changes_nothing() {
     run(&fit_args(m, &model));
     let before = listing(out.path());
     assert_eq!(names(&before), ["a.model", "a.model.store"]);
+    let args = fit_args(m, &model);
+    for (phase, signal, code) in [
+        ("store", libc::SIGINT, 130),
+        ("optimise", libc::SIGTERM, 143),
+        ("commit", libc::SIGINT, 130),
+    ] {
+        check_interrupted_at(&args, phase, signal, code, out.path(), &before, &before);
+        assert_eq!(listing(out.path()), before, "fit signalled in {phase}");
+    }
     for (i, delay) in delays().enumerate() {
         let (signal, code) = if i % 2 == 0 {
             (libc::SIGINT, 130)
@@ -211,6 +301,12 @@ fn synth_interrupted_writes_all_files_or_none() {
     let complete = listing(materials());
     std::fs::create_dir(&dir).unwrap();
     let empty = listing(&dir);
+    let args = [&SYNTH[..], &[dir_arg]].concat();
+    // Signalled as the files go in: they all do.
+    check_interrupted_at(&args, "commit", libc::SIGINT, 130, &dir, &empty, &complete);
+    assert_eq!(listing(&dir), complete);
+    std::fs::remove_dir_all(&dir).unwrap();
+    std::fs::create_dir(&dir).unwrap();
     for delay in [20, 150, 300].map(Duration::from_millis) {
         let (code, stderr) = interrupt(
             spawn(&[&SYNTH[..], &[dir_arg]].concat()),
@@ -255,6 +351,16 @@ fn map_interrupted_changes_nothing() {
     ];
     run(&args);
     let before = listing(out.path());
+    check_interrupted_at(
+        &args,
+        "map",
+        libc::SIGINT,
+        130,
+        out.path(),
+        &before,
+        &before,
+    );
+    assert_eq!(listing(out.path()), before, "map signalled while drawing");
     for delay in [50, 300].map(Duration::from_millis) {
         let (code, stderr) = interrupt(spawn(&args), delay, libc::SIGINT);
         let what = format!("map after {delay:?}");
@@ -274,6 +380,32 @@ fn prepare_interrupted_leaves_no_lattice() {
     run(&args);
     let complete = listing(out.path());
     std::fs::remove_file(out.path().join("a.lattice")).unwrap();
+    let phase = "lattice, the cells' last nodes";
+    check_interrupted_at(
+        &args,
+        phase,
+        libc::SIGINT,
+        130,
+        out.path(),
+        &before,
+        &complete,
+    );
+    assert_eq!(
+        listing(out.path()),
+        before,
+        "prepare signalled while building"
+    );
+    check_interrupted_at(
+        &args,
+        "commit",
+        libc::SIGINT,
+        130,
+        out.path(),
+        &before,
+        &complete,
+    );
+    assert_eq!(names(&listing(out.path())), names(&complete));
+    std::fs::remove_file(out.path().join("a.lattice")).unwrap();
     for delay in [50, 300].map(Duration::from_millis) {
         let (code, stderr) = interrupt(spawn(&args), delay, libc::SIGINT);
         let what = format!("prepare after {delay:?}");
@@ -292,6 +424,12 @@ fn report_interrupted_keeps_the_old_report_whole() {
     let args = ["report", m_arg, "-o", rep.to_str().unwrap(), "--quick"];
     run(&args);
     let (top, inside) = (listing(tmp.path()), listing(&rep));
+    check_interrupted_at(&args, "loo", libc::SIGINT, 130, tmp.path(), &top, &top);
+    assert_eq!(
+        listing(&rep),
+        inside,
+        "report signalled in its leave-one-out pass"
+    );
     for delay in [50, 400].map(Duration::from_millis) {
         let (code, stderr) = interrupt(spawn(&args), delay, libc::SIGINT);
         let what = format!("report after {delay:?}");

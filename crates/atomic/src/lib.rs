@@ -298,10 +298,10 @@ impl PendingFile {
             std::fs::rename(&tmp, &self.target)?;
             self.done = true;
             forget(&tmp);
-            Ok::<_, io::Error>(())
-        })?;
-        mark_committed(&self.target);
-        Ok(())
+            // Inside the commit: an interrupt waiting for it must see it.
+            mark_committed(&self.target);
+            Ok(())
+        })
     }
 
     /// Give the file its temporary name (if it has none) and hand that name
