@@ -2,7 +2,7 @@
 //! full reconstruction, point queries and albedo maps.
 //!
 //! Data: the directory named by `BRDF_ATLAS_NBRDF_DIR` (MERL files, e.g.
-//! the 100 NBRDF-derived materials from `../shared/tools/nbrdf-to-merl`),
+//! the 100 NBRDF-derived materials from `brdf-atlas nbrdf`),
 //! or else 16 synthetic materials at 90 x 90 x 180. The models are fitted
 //! once before timing starts (and the log model's map prepared, unless
 //! `BRDF_ATLAS_PREPARED_MODEL` names a model prepared before). Run with `cargo bench --bench atlas`.

@@ -7,7 +7,7 @@
 //! the allocator; the inputs and the store are mapped files, not heap).
 //!
 //! Data: the directory named by `BRDF_ATLAS_NBRDF_DIR` (e.g. the 100
-//! NBRDF-derived materials from `../shared/tools/nbrdf-to-merl`), or else 16
+//! NBRDF-derived materials from `brdf-atlas nbrdf`), or else 16
 //! synthetic materials at 90 x 90 x 180. Page cache warm: every input has
 //! been read by the fit before timing. Run with `cargo bench --bench fit`.
 

@@ -26,6 +26,7 @@ use crate::error::Error;
 const EXAMPLES: &str = "Examples:
   brdf-atlas demo                                    synthesise materials, fit, map, reconstruct
   brdf-atlas synth --count 8 --seed 3 materials/     write 8 synthetic 90x90x180 MERL files
+  brdf-atlas nbrdf --count 8 merl/                   write 8 of the 100 MERL materials (neural fits)
   brdf-atlas info materials/*.binary                 check and summarise MERL files
   brdf-atlas fit materials/ -o atlas.model           fit a 2-D latent space to them
   brdf-atlas map atlas.model -o map.png              draw it, coloured by albedo
@@ -66,6 +67,7 @@ struct Cli {
 enum Command {
     Info(cmd::info::Args),
     Synth(cmd::synth::Args),
+    Nbrdf(cmd::nbrdf::Args),
     Fit(cmd::fit::Args),
     Reconstruct(cmd::reconstruct::Args),
     Eval(cmd::eval::Args),
@@ -81,6 +83,7 @@ fn run(command: &Command) -> Result<ExitCode, Error> {
     match command {
         Command::Info(args) => cmd::info::run(args),
         Command::Synth(args) => cmd::synth::run(args),
+        Command::Nbrdf(args) => cmd::nbrdf::run(args),
         Command::Fit(args) => cmd::fit::run(args),
         Command::Reconstruct(args) => cmd::reconstruct::run(args),
         Command::Eval(args) => cmd::eval::run(args),

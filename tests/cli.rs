@@ -247,3 +247,68 @@ fn demo_needs_three_materials_for_a_map() {
     assert!(texts(&out).1.contains("--count"), "{}", texts(&out).1);
     assert!(!demo_dir.exists());
 }
+
+#[test]
+fn nbrdf_writes_the_neural_fits_as_merl_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("merl");
+    let o = brdf_atlas([
+        "nbrdf",
+        out.to_str().unwrap(),
+        "--only",
+        "black-fabric,gold-metallic-paint",
+        "--dims",
+        "16,16,32",
+    ]);
+    let (stdout, stderr) = texts(&o);
+    assert!(o.status.success(), "{stderr}");
+    assert!(
+        stdout.contains("wrote 2 NBRDF materials (16x16x32"),
+        "{stdout}"
+    );
+    // Real MERL files, darker and brighter as the materials are.
+    let albedo = |name: &str| {
+        let t = brdf_merl::MerlTable::read(out.join(format!("{name}.binary"))).unwrap();
+        assert_eq!(t.dims(), brdf_merl::Dims::new(16, 16, 32).unwrap());
+        brdf_merl::Quadrature::dense(t.dims(), 2).albedo(&t)
+    };
+    let (black, gold) = (albedo("black-fabric"), albedo("gold-metallic-paint"));
+    assert!(black.iter().all(|&a| a > 0.0 && a < 0.05), "{black:?}");
+    // Gold: red above blue, and far above black fabric.
+    assert!(
+        gold[0] > 2.0 * gold[2] && gold[0] > 5.0 * black[0],
+        "{gold:?}"
+    );
+    // --list names all 100; --count takes the first in that order.
+    let o = brdf_atlas(["nbrdf", "--list"]);
+    let (list, _) = texts(&o);
+    assert_eq!(list.lines().count(), 100);
+    let first = list.lines().next().unwrap().to_owned();
+    let few = dir.path().join("few");
+    let o = brdf_atlas([
+        "nbrdf",
+        few.to_str().unwrap(),
+        "--count",
+        "1",
+        "--dims",
+        "4,4,8",
+    ]);
+    assert!(o.status.success());
+    assert!(few.join(format!("{first}.binary")).is_file());
+    // An unknown name: one line, exit 1, nothing written.
+    let none = dir.path().join("none");
+    let o = brdf_atlas([
+        "nbrdf",
+        none.to_str().unwrap(),
+        "--only",
+        "teflon,unobtainium",
+    ]);
+    let (_, stderr) = texts(&o);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("\"unobtainium\" is not one of the 100 NBRDF materials"),
+        "{stderr}"
+    );
+    assert!(!none.exists());
+}

@@ -1,6 +1,6 @@
 //! The tool on realistic data: the MERL materials as fitted by a neural
-//! model, written by `../shared/tools/nbrdf-to-merl` into the directory named
-//! by `BRDF_ATLAS_NBRDF_DIR`.
+//! model, written by `brdf-atlas nbrdf` into the directory named by
+//! `BRDF_ATLAS_NBRDF_DIR`.
 //!
 //! The tests are ignored by default, so a plain `cargo test` lists them as
 //! ignored with the reason instead of passing them. Under continuous
@@ -28,7 +28,7 @@ fn nbrdf_files(min: usize) -> (PathBuf, Vec<PathBuf>) {
     let Some(dir) = std::env::var_os("BRDF_ATLAS_NBRDF_DIR").filter(|d| !d.is_empty()) else {
         panic!(
             "BRDF_ATLAS_NBRDF_DIR is not set: these tests need realistic MERL data \
-             (python3 ../shared/tools/nbrdf-to-merl DIR --count 8, then \
+             (brdf-atlas nbrdf DIR --count 8, then \
              BRDF_ATLAS_NBRDF_DIR=DIR)"
         );
     };

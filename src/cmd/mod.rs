@@ -9,6 +9,7 @@ pub mod fit;
 pub mod info;
 pub mod locate;
 pub mod map;
+pub mod nbrdf;
 pub mod prepare;
 pub mod reconstruct;
 pub mod report;

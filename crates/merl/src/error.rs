@@ -17,6 +17,14 @@ pub enum MerlError {
         /// What the OS said.
         source: std::io::Error,
     },
+    /// A material the NBRDF database does not have ([`crate::nbrdf`]).
+    #[error(
+        "{name:?} is not one of the 100 NBRDF materials (`brdf-atlas nbrdf --list` names them)"
+    )]
+    UnknownMaterial {
+        /// The name asked for.
+        name: String,
+    },
     /// The file is a Git LFS pointer, not the table it stands for.
     #[error("{}: is a Git LFS pointer file, not MERL data (run `git lfs pull` to fetch the real table)", path.display())]
     LfsPointer {

@@ -2,8 +2,9 @@
 //!
 //! Read and validate `.binary` files ([`MerlFile`], memory-mapped; [`MerlTable`],
 //! in memory), look up bins from angles or directions ([`Dims`], [`HalfDiff`]),
-//! write tables atomically, integrate albedo ([`Quadrature`]) and synthesise
-//! analytic materials in the same layout ([`synth`]).
+//! write tables atomically, integrate albedo ([`Quadrature`]), synthesise
+//! analytic materials in the same layout ([`synth`]) and tabulate the 100
+//! MERL materials as fitted by Neural BRDF ([`nbrdf`]).
 //!
 //! ```
 //! use brdf_merl::{Dims, MerlTable, Quadrature};
@@ -19,6 +20,7 @@ pub mod albedo;
 pub mod angles;
 pub mod directional;
 pub mod error;
+pub mod nbrdf;
 pub mod sniff;
 pub mod synth;
 pub mod table;
