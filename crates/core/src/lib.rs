@@ -18,7 +18,7 @@
 //!   ([`AlbedoMap`]), their contours and pictures ([`render`]);
 //! - `eval`: leave-one-out errors ([`loo`]) and how each material comes
 //!   back at its own point and left out ([`fidelity`]);
-//! - `simd`: the vectorised kernels the hot loops share (CPU features are
+//! - [`simd`]: the vectorised kernels the hot loops share (CPU features are
 //!   detected once).
 //!
 //! ```no_run
@@ -44,7 +44,7 @@ pub mod limits;
 mod model;
 mod progress;
 mod query;
-mod simd;
+pub mod simd;
 
 pub use data::{Dataset, Precision, Rows, Store, StoreIdentity, TransformKind, build_store};
 pub use error::{CoreError, ParamError, Result};
