@@ -66,6 +66,11 @@ pub use query::{
 pub use query::{field, floor, render, sheet, swatch};
 pub use simd::fastlog;
 
+/// The SIGBUS handler that keeps a store truncated under its map from
+/// killing the process, and how a host opts out of it before the first
+/// model is opened ([`brdf_mapguard`]'s docs say what it installs).
+pub use brdf_mapguard::{NO_HANDLER_ENV, set_sigbus_guard, sigbus_guarded};
+
 // The unit tests run under the counting allocator, so `heap` is tested as a
 // binary uses it.
 #[cfg(test)]

@@ -35,9 +35,11 @@
 //! sees before such a read.
 //!
 //! Reading with positioned reads into the library's own blocks instead of
-//! a map would need no handler, but costs 12 to 30% in the store's passes
-//! (docs/performance.md, "Reading the store: memory map or positioned
-//! reads"), so the maps and their handler stay, with the opt-out.
+//! a map would need no handler, but costs a pass over the store 24 to 45%
+//! more for a reconstruction, 3 to 25% for the exact albedo pass and the
+//! Gram matrix (docs/performance.md, "Reading the store: memory map or
+//! positioned reads"), so the maps and their handler stay, with the
+//! opt-out.
 //!
 //! ```
 //! use brdf_mapguard::{GuardedMap, Watch};
