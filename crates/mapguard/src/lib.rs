@@ -35,8 +35,8 @@
 //! sees before such a read.
 //!
 //! Reading with positioned reads into the library's own blocks instead of
-//! a map would need no handler, but costs a pass over the store 24 to 45%
-//! more for a reconstruction, 3 to 25% for the exact albedo pass and the
+//! a map would need no handler, but costs a pass over the store 24 to 97%
+//! more for a reconstruction, 3 to 21% for the exact albedo pass and the
 //! Gram matrix (docs/performance.md, "Reading the store: memory map or
 //! positioned reads"), so the maps and their handler stay, with the
 //! opt-out.
