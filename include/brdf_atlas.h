@@ -527,6 +527,27 @@ enum BrdfAtlasStatus brdf_atlas_model_variance_map(const struct BrdfAtlasModel *
                                                    size_t len);
 
 /**
+ * Choose, before the first `brdf_atlas_model_open`, whether the library
+ * installs its process-wide SIGBUS handler (see `brdf_atlas_model_open`).
+ *
+ * `enabled` nonzero: the first open installs it (the default). Zero: no
+ * handler, SIGBUS's disposition stays the host's; a store truncated under
+ * an open handle then raises SIGBUS in the call that reads past its new
+ * end (the host's handler gets it, or the process dies), instead of
+ * turning into BAD_FILE. The choice is made once for the process, by the
+ * first of this call, the first open and the environment variable
+ * `BRDF_ATLAS_NO_SIGBUS_HANDLER=1` (read at the first open, when no call
+ * came first).
+ *
+ * Ownership: nothing is passed or kept.
+ *
+ * Returns OK when the process's choice is now `enabled`, INVALID_ARGUMENT
+ * when it was already made the other way (a model was opened first, or an
+ * earlier call chose otherwise): an installed handler stays installed.
+ */
+enum BrdfAtlasStatus brdf_atlas_set_sigbus_guard(int enabled);
+
+/**
  * Open the model file at `path` (its store, `path` + ".store", beside it)
  * and check it: format, version, the store's size and checksum.
  *
@@ -545,11 +566,20 @@ enum BrdfAtlasStatus brdf_atlas_model_variance_map(const struct BrdfAtlasModel *
  * changed on disk while open, and so does every later call on this
  * handle until it is freed and the model reopened. Replacing the store by
  * a rename (as `brdf-atlas fit` does) changes nothing for an open handle:
- * it keeps reading the file it opened. The library installs a SIGBUS
- * handler for this on the first open, in front of the process's own:
- * faults outside the library's maps still reach the handler that was
- * there before (a handler installed after the first open must pass
- * SIGBUS on to the one it replaced, or truncations kill the process).
+ * it keeps reading the file it opened.
+ *
+ * Signals: for this, the first open installs a process-wide SIGBUS handler
+ * (`sigaction` with `SA_SIGINFO | SA_ONSTACK | SA_NODEFER`), once, never
+ * removed. It chains: a SIGBUS outside the library's own maps goes to the
+ * action SIGBUS had before the first open (its handler, or the default
+ * action); a handler installed after the first open must pass SIGBUS on
+ * to the one it replaced, or truncations kill the process. To leave
+ * SIGBUS alone (a JVM, a sanitizer, a crash reporter), opt out before the
+ * first open: call `brdf_atlas_set_sigbus_guard(0)`, or set the
+ * environment variable `BRDF_ATLAS_NO_SIGBUS_HANDLER=1`. Then a store
+ * truncated under an open handle raises SIGBUS in the call that reads
+ * past its new end, as any memory map does (the host's handler gets it, or
+ * the process dies); a rewrite in place is still reported as above.
  *
  * # Safety
  * `path` is NULL or a NUL-terminated string; `out` is NULL or valid for

@@ -95,6 +95,16 @@ impl PyModel {
     /// Open a model file (`brdf-atlas fit` or `brdf_atlas.fit` writes them)
     /// and its store; checks format, version, shapes and the store's
     /// checksum.
+    ///
+    /// The store stays memory-mapped while the model lives. So that a store
+    /// truncated under the map raises an error (the store "changed on disk
+    /// while open") instead of killing the interpreter, the first model
+    /// opened installs a process-wide SIGBUS handler, once; it chains:
+    /// every other SIGBUS goes to the handler the process had before
+    /// (Python's `faulthandler`'s, for one). To leave SIGBUS alone, set
+    /// `os.environ["BRDF_ATLAS_NO_SIGBUS_HANDLER"] = "1"` before the first
+    /// model is opened; a store truncated under an open model then kills
+    /// the process with SIGBUS when a query reads past its new end.
     #[new]
     fn new(py: Python<'_>, path: PathBuf) -> PyResult<PyModel> {
         let model = py.detach(|| Model::open(&path)).map_err(Failure::from)?;

@@ -18,7 +18,7 @@
 //!   ([`AlbedoMap`]), their contours and pictures ([`render`]);
 //! - `eval`: leave-one-out errors ([`loo`]) and how each material comes
 //!   back at its own point and left out ([`fidelity`]);
-//! - `simd`: the vectorised kernels the hot loops share (CPU features are
+//! - [`simd`]: the vectorised kernels the hot loops share (CPU features are
 //!   detected once).
 //!
 //! ```no_run
@@ -44,7 +44,7 @@ pub mod limits;
 mod model;
 mod progress;
 mod query;
-mod simd;
+pub mod simd;
 
 pub use data::{Dataset, Precision, Rows, Store, StoreIdentity, TransformKind, build_store};
 pub use error::{CoreError, ParamError, Result};
@@ -65,6 +65,11 @@ pub use query::{
 };
 pub use query::{field, floor, render, sheet, swatch};
 pub use simd::fastlog;
+
+/// The SIGBUS handler that keeps a store truncated under its map from
+/// killing the process, and how a host opts out of it before the first
+/// model is opened ([`brdf_mapguard`]'s docs say what it installs).
+pub use brdf_mapguard::{NO_HANDLER_ENV, set_sigbus_guard, sigbus_guarded};
 
 // The unit tests run under the counting allocator, so `heap` is tested as a
 // binary uses it.

@@ -26,7 +26,10 @@
 //!   truncated or rewritten in place under an open handle makes the call
 //!   that reads it, and every later call on that handle, return
 //!   `BRDF_ATLAS_STATUS_BAD_FILE` ("... changed on disk while open ...")
-//!   until the model is reopened (`brdf_atlas_model_open`).
+//!   until the model is reopened (`brdf_atlas_model_open`). For this the
+//!   first open installs a process-wide SIGBUS handler that chains to the
+//!   host's; `brdf_atlas_set_sigbus_guard(0)` before it (or
+//!   `BRDF_ATLAS_NO_SIGBUS_HANDLER=1`) leaves SIGBUS alone.
 //!
 //! ```
 //! use std::ffi::CStr;
@@ -65,7 +68,7 @@ pub use model::{
     BrdfAtlasDims, BrdfAtlasModel, BrdfAtlasView, brdf_atlas_model_dims, brdf_atlas_model_free,
     brdf_atlas_model_latent_dim, brdf_atlas_model_latent_point, brdf_atlas_model_material_count,
     brdf_atlas_model_material_name, brdf_atlas_model_open, brdf_atlas_model_table_len,
-    brdf_atlas_model_view,
+    brdf_atlas_model_view, brdf_atlas_set_sigbus_guard,
 };
 pub use plausibility::{
     BRDF_ATLAS_BLEND_FLOOR, BRDF_ATLAS_BLEND_GP, BRDF_ATLAS_BLEND_PLAUSIBLE, BrdfAtlasPlausibility,

@@ -18,6 +18,29 @@
 //! So a reader maps, reads, then asks [`GuardedMap::changed`] before it
 //! trusts what it read; once changed, a map stays changed.
 //!
+//! ## The process-wide handler, and how to opt out
+//!
+//! The first [`GuardedMap::open`] installs a `SA_SIGINFO` handler for
+//! SIGBUS with `sigaction` (flags `SA_ONSTACK | SA_NODEFER`), once for the
+//! process and never removed. It chains: a SIGBUS outside the library's
+//! own maps goes to the action SIGBUS had before (its handler, called as it
+//! asked to be, or the default action); a handler the host installs later
+//! must pass SIGBUS on to the one it replaced, or a truncation kills the
+//! process. A host that wants SIGBUS left alone (a JVM, a sanitizer, a
+//! crash reporter) opts out before the first map is opened, with
+//! [`set_sigbus_guard`]`(false)` or by setting [`NO_HANDLER_ENV`]
+//! (`BRDF_ATLAS_NO_SIGBUS_HANDLER=1`); then a read past the end of a file
+//! truncated under its map raises SIGBUS as it would without the library,
+//! and [`GuardedMap::changed`] still reports a rewrite or a truncation it
+//! sees before such a read.
+//!
+//! Reading with positioned reads into the library's own blocks instead of
+//! a map would need no handler, but costs a pass over the store 24 to 97%
+//! more for a reconstruction, 3 to 21% for the exact albedo pass and the
+//! Gram matrix (docs/performance.md, "Reading the store: memory map or
+//! positioned reads"), so the maps and their handler stay, with the
+//! opt-out.
+//!
 //! ```
 //! use brdf_mapguard::{GuardedMap, Watch};
 //! let dir = tempfile::tempdir().unwrap();
@@ -39,9 +62,12 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use memmap2::Mmap;
 
+mod choice;
 #[cfg(target_os = "linux")]
 mod handler;
 mod regular;
+
+pub use choice::{NO_HANDLER_ENV, set_sigbus_guard, sigbus_guarded};
 
 pub use regular::{open_regular, read_regular, regular_file};
 mod registry;
@@ -84,7 +110,8 @@ impl Stamp {
 }
 
 /// A read-only map of a whole file, registered with the SIGBUS handler
-/// while it lives. Dereferences to its bytes.
+/// while it lives (unless the process opted out, [`set_sigbus_guard`]).
+/// Dereferences to its bytes.
 pub struct GuardedMap {
     map: Mmap,
     path: PathBuf,
@@ -104,7 +131,9 @@ impl std::fmt::Debug for GuardedMap {
 }
 
 impl GuardedMap {
-    /// Open and map the file at `path`, read-only.
+    /// Open and map the file at `path`, read-only. The first open of the
+    /// process installs the SIGBUS handler, unless it opted out (see the
+    /// crate docs).
     pub fn open(path: &Path, watch: Watch) -> io::Result<GuardedMap> {
         let file = open_regular(path)?;
         Self::map_file(file, path, watch)
@@ -125,14 +154,19 @@ impl GuardedMap {
 
     fn map_file(file: File, path: &Path, watch: Watch) -> io::Result<GuardedMap> {
         let seen = Stamp::of(&file.metadata()?);
+        let guarded = sigbus_guarded();
         #[cfg(target_os = "linux")]
-        handler::install();
+        if guarded {
+            handler::install();
+        }
         // SAFETY: a read-only map. A file changed under it cannot make safe
         // Rust unsound here: its bytes are read as plain integers and
         // floats, and a truncation (SIGBUS) is answered with zero pages by
         // the handler, for as long as the range is registered (until drop).
+        // A process that opted out of the handler gets SIGBUS then, as with
+        // any map: a signal, not undefined behaviour in safe code.
         let map = unsafe { Mmap::map(&file) }?;
-        let slot = if map.is_empty() {
+        let slot = if map.is_empty() || !guarded {
             None
         } else {
             Some(
