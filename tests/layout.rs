@@ -2,7 +2,8 @@
 //! that use each other, directly or through others, at any level of the
 //! tree), and no source file over 700 lines.
 //!
-//! A module's `crate::...` paths outside its unit tests are its
+//! A module's paths into its crate outside its unit tests (`crate::...`,
+//! and `super::...` and `self::...`, brace groups included) are its
 //! dependencies. A folder is one
 //! unit to the modules outside it, so a dependency counts between the two
 //! siblings under the deepest module that contains both ends: `query::map`
@@ -19,6 +20,7 @@ const ROOTS: &[&str] = &[
     "src",
     "crates/core/src",
     "crates/atomic/src",
+    "crates/mapguard/src",
     "crates/merl/src",
     "crates/ffi/src",
     "crates/hostile/src",
@@ -56,28 +58,113 @@ fn module_of(root: &Path, file: &Path) -> Vec<String> {
     parts
 }
 
-/// Every `crate::a::b::...` path in `text`, as its segments.
-fn crate_paths(text: &str) -> Vec<Vec<String>> {
+/// Every path of `text` that names a module of the crate, resolved to
+/// segments from the crate root: `crate::a::b`, and `super::x` or
+/// `self::x` relative to `module` (the file's own module; in a `mod.rs` or
+/// a plain file alike, `super` is its parent), with brace groups
+/// (`use super::{a, b::c}`) taken apart. Comments are skipped.
+fn module_paths(text: &str, module: &[String]) -> Vec<Vec<String>> {
     let mut out = Vec::new();
     for line in text.lines() {
         let code = line.split("//").next().unwrap_or("");
-        let mut rest = code;
-        while let Some(i) = rest.find("crate::") {
-            let tail = &rest[i + "crate::".len()..];
-            let segs: Vec<String> = tail
-                .split("::")
-                .map(|s| {
-                    s.chars()
-                        .take_while(|c| c.is_alphanumeric() || *c == '_')
-                        .collect::<String>()
-                })
-                .take_while(|s| !s.is_empty())
-                .collect();
-            out.push(segs);
-            rest = tail;
+        let bytes = code.as_bytes();
+        let mut i = 0;
+        while i < code.len() {
+            let starts_word = i == 0
+                || !(bytes[i - 1].is_ascii_alphanumeric()
+                    || bytes[i - 1] == b'_'
+                    || bytes[i - 1] == b':');
+            let rest = &code[i..];
+            let base: Option<(Vec<String>, usize)> = if !starts_word {
+                None
+            } else if rest.starts_with("crate::") {
+                Some((Vec::new(), "crate::".len()))
+            } else if rest.starts_with("super::") || rest.starts_with("self::") {
+                // super::super::... climbs once a `super`.
+                let mut base = module.to_vec();
+                let mut at = 0;
+                loop {
+                    if code[i + at..].starts_with("super::") {
+                        base.pop();
+                        at += "super::".len();
+                    } else if code[i + at..].starts_with("self::") {
+                        at += "self::".len();
+                    } else {
+                        break;
+                    }
+                }
+                Some((base, at))
+            } else {
+                None
+            };
+            let Some((base, skip)) = base else {
+                i += rest.chars().next().map_or(1, char::len_utf8);
+                continue;
+            };
+            let tail = &code[i + skip..];
+            for segs in tree_paths(tail) {
+                let mut path = base.clone();
+                path.extend(segs);
+                out.push(path);
+            }
+            i += skip;
         }
     }
     out
+}
+
+/// The paths a use tree starting at `tail` names: `a::b::C` gives one,
+/// `{a, b::{c, d}}` one per leaf (each as far as its identifiers go).
+fn tree_paths(tail: &str) -> Vec<Vec<String>> {
+    let ident = |s: &str| -> String {
+        s.chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect()
+    };
+    let mut prefix = Vec::new();
+    let mut rest = tail.trim_start();
+    loop {
+        if let Some(group) = rest.strip_prefix('{') {
+            // Split the group at its top-level commas.
+            let (mut depth, mut start, mut items) = (0usize, 0usize, Vec::new());
+            let mut end = group.len();
+            for (k, ch) in group.char_indices() {
+                match ch {
+                    '{' => depth += 1,
+                    '}' if depth == 0 => {
+                        end = k;
+                        break;
+                    }
+                    '}' => depth -= 1,
+                    ',' if depth == 0 => {
+                        items.push(&group[start..k]);
+                        start = k + 1;
+                    }
+                    _ => {}
+                }
+            }
+            items.push(&group[start..end]);
+            let mut out = Vec::new();
+            for item in items {
+                for p in tree_paths(item) {
+                    let mut full = prefix.clone();
+                    full.extend(p);
+                    out.push(full);
+                }
+            }
+            return out;
+        }
+        let seg = ident(rest);
+        if seg.is_empty() {
+            return vec![prefix];
+        }
+        rest = &rest[seg.len()..];
+        prefix.push(seg);
+        match rest.strip_prefix("::") {
+            Some(r) => rest = r,
+            None => return vec![prefix],
+        }
+    }
 }
 
 /// The cycles among the sibling modules of one crate, as readable strings.
@@ -93,7 +180,7 @@ fn cycles(root: &Path) -> Vec<String> {
         // Unit tests are consumers of the modules they test, not part of
         // their layering: the scan stops at the test module.
         let text = text.split("#[cfg(test)]\nmod tests").next().unwrap_or("");
-        for path in crate_paths(text) {
+        for path in module_paths(text, &from) {
             // The longest prefix of the path that is a module of the crate.
             let to = (0..=path.len())
                 .rev()
@@ -177,6 +264,36 @@ fn the_cycle_check_finds_a_planted_cycle() {
         found[0].contains("model -> query -> model")
             || found[0].contains("query -> model -> query")
     );
+    // The same cycle through `super::` paths and a brace group.
+    std::fs::write(
+        src.join("model.rs"),
+        "use crate::{io, query::{map::Basis}};\n",
+    )
+    .unwrap();
+    std::fs::write(
+        src.join("query/map.rs"),
+        "use super::super::model::Model;\n",
+    )
+    .unwrap();
+    let found = cycles(src);
+    assert_eq!(found.len(), 1, "{found:?}");
+    std::fs::write(src.join("model.rs"), "").unwrap();
+    // Siblings of a folder using each other by `super::`.
+    std::fs::create_dir_all(src.join("report")).unwrap();
+    std::fs::write(src.join("lib.rs"), "mod model;\nmod query;\nmod report;\n").unwrap();
+    std::fs::write(src.join("report/mod.rs"), "mod csv;\nmod measure;\n").unwrap();
+    std::fs::write(src.join("report/csv.rs"), "use super::measure::Results;\n").unwrap();
+    std::fs::write(
+        src.join("report/measure.rs"),
+        "use super::{csv::e, Plan};\n",
+    )
+    .unwrap();
+    std::fs::write(src.join("query/map.rs"), "").unwrap();
+    let found = cycles(src);
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert!(found[0].contains("in report: "), "{found:?}");
+    std::fs::write(src.join("report/measure.rs"), "use super::Plan;\n").unwrap();
+    assert!(cycles(src).is_empty(), "{:?}", cycles(src));
     // Within a folder, a child using its parent's re-exports is no cycle.
     std::fs::write(src.join("model.rs"), "").unwrap();
     std::fs::write(src.join("query/map.rs"), "use crate::query::Thing;\n").unwrap();

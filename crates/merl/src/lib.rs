@@ -24,6 +24,7 @@ pub mod nbrdf;
 pub mod sniff;
 pub mod synth;
 pub mod table;
+pub mod values;
 
 pub use albedo::Quadrature;
 pub use angles::{Dims, HalfDiff, Vec3};

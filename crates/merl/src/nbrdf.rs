@@ -218,12 +218,9 @@ mod tests {
                 let got = table.value(0, bin);
                 if wi[2] > 1e-9 && wo[2] > 1e-9 {
                     measured += 1;
-                    for c in 0..3 {
+                    for (c, &w) in want.iter().enumerate() {
                         let v = table.value(c, bin).expect("measured");
-                        assert!(
-                            (v - want[c]).abs() <= 1e-12 * want[c].max(1.0),
-                            "{name} {bin}"
-                        );
+                        assert!((v - w).abs() <= 1e-12 * w.max(1.0), "{name} {bin}");
                     }
                 } else if wi[2] < -1e-9 || wo[2] < -1e-9 {
                     assert_eq!(got, None, "{name} {bin}: below the horizon");

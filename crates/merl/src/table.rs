@@ -13,6 +13,8 @@ use brdf_mapguard::{GuardedMap, Watch};
 
 use crate::angles::{Dims, MAX_DIM, Vec3};
 use crate::error::{MerlError, Result};
+pub use crate::values::{MAX_REFLECTANCE, is_invalid, is_non_finite, is_suspect};
+use crate::values::{first_out_of_range, scan_values};
 use brdf_atomic::{PendingFile, stage};
 
 /// Bytes of the header.
@@ -43,46 +45,6 @@ pub fn raw_from_physical(channel: usize, value: f64) -> f64 {
 /// repository holds in place of a large file until `git lfs pull` fetches it)?
 pub fn is_lfs_pointer(bytes: &[u8]) -> bool {
     bytes.starts_with(b"version https://git-lfs")
-}
-
-/// Is `v` infinite or NaN? Branch-free on the bits, so loops that OR it
-/// over many values vectorise (the readers' validity scans).
-#[inline(always)]
-pub fn is_non_finite(v: f64) -> bool {
-    (v.to_bits() & EXPONENT) == EXPONENT
-}
-
-/// The largest reflectance (1/sr) a MERL file may hold. A perfect mirror
-/// averaged over MERL's finest half-angle bin (theta_h below 0.011 degrees)
-/// reflects about 2e6; measured materials stay below 1e4. A value beyond
-/// 1e8 is no reflectance but a broken file, and its squares and sums over a
-/// table (4.4e22 at most here) stay far from overflowing a double or the
-/// store's single precision, whatever the transform.
-pub const MAX_REFLECTANCE: f64 = 1e8;
-
-/// Raw values above this are beyond [`MAX_REFLECTANCE`] in the channel with
-/// the largest scale (blue), so at or below it no channel's is.
-const RAW_SUSPECT: f64 = MAX_REFLECTANCE / SCALE[2];
-
-/// Might raw value `v` be out of range (not finite, or beyond
-/// [`MAX_REFLECTANCE`] in some channel)? Branch-free like
-/// [`is_non_finite`]; a `true` is settled by [`MerlFile::check_values`].
-#[inline(always)]
-pub fn is_suspect(v: f64) -> bool {
-    is_non_finite(v) | (v > RAW_SUSPECT)
-}
-
-/// Is raw value `v` of `channel` out of range: not finite, or a reflectance
-/// beyond [`MAX_REFLECTANCE`]? (Negative values mark unmeasured bins.)
-#[inline]
-fn out_of_range(channel: usize, v: f64) -> bool {
-    !v.is_finite() || physical(channel, v) > MAX_REFLECTANCE
-}
-
-/// Does a raw value mark an unmeasured sample?
-#[inline]
-pub fn is_invalid(raw: f64) -> bool {
-    raw < 0.0
 }
 
 /// A validated MERL file, memory-mapped: nothing is copied until asked.
@@ -277,74 +239,6 @@ fn check_header(path: &Path, bytes: &[u8], len: u64) -> Result<Dims> {
         });
     }
     Ok(dims)
-}
-
-/// Check every value is finite and within [`MAX_REFLECTANCE`]; count the
-/// negative (unmeasured) ones per channel.
-fn scan_values(path: &Path, dims: Dims, data: &[u8]) -> Result<[usize; 3]> {
-    let per_channel = data.len() / 24;
-    let mut invalid = [0usize; 3];
-    for (channel, block) in data.chunks_exact(8 * per_channel).enumerate() {
-        // A branch-free pass (vectorises): count the negatives and see whether
-        // any value may be out of range; find it only if so.
-        let (mut negative, mut suspect) = (0usize, 0u64);
-        for b in block.chunks_exact(8) {
-            let v = f64::from_le_bytes(b.try_into().expect("8 bytes"));
-            negative += is_invalid(v) as usize;
-            suspect |= is_suspect(v) as u64;
-        }
-        if suspect != 0 {
-            let values = block
-                .chunks_exact(8)
-                .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")));
-            if let Some(e) = first_out_of_range(path, dims, channel * per_channel, values) {
-                return Err(e);
-            }
-        }
-        invalid[channel] = negative;
-    }
-    Ok(invalid)
-}
-
-/// The exponent field of an f64: all ones for infinities and NaNs.
-const EXPONENT: u64 = 0x7ff0_0000_0000_0000;
-
-/// The error for the first out-of-range value of `values`, which start at
-/// flat index `start` of a file of `dims`, if there is one.
-fn first_out_of_range(
-    path: &Path,
-    dims: Dims,
-    start: usize,
-    values: impl Iterator<Item = f64>,
-) -> Option<MerlError> {
-    let bins = dims.bins();
-    let (index, value) = values
-        .enumerate()
-        .map(|(k, v)| (start + k, v))
-        .find(|&(index, v)| out_of_range(index / bins, v))?;
-    let (path, channel, bin) = (path.to_path_buf(), index / bins, index % bins);
-    let name = CHANNELS[channel];
-    Some(if value.is_finite() {
-        let (theta_h, rest) = (
-            bin / (dims.theta_d * dims.phi_d),
-            bin % (dims.theta_d * dims.phi_d),
-        );
-        MerlError::Absurd {
-            path,
-            index,
-            channel: name,
-            bin: [theta_h, rest / dims.phi_d, rest % dims.phi_d],
-            reflectance: physical(channel, value),
-        }
-    } else {
-        MerlError::NonFinite {
-            path,
-            index,
-            channel: name,
-            bin,
-            value,
-        }
-    })
 }
 
 /// A MERL table in memory, values in raw file units.

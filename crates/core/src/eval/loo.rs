@@ -71,8 +71,7 @@ pub struct Errors {
     pub albedo: Vec<[f64; 3]>,
 }
 
-/// The offset `e` of the log-relative error [`Errors::log_rel`].
-pub const LOG_REL_OFFSET: f64 = 1e-3;
+pub use super::score::LOG_REL_OFFSET;
 
 impl Errors {
     /// RMSE of material `i`'s reflectance over the scored rows.

@@ -2,8 +2,11 @@
 //! rows adds to the error and albedo sums of every output.
 
 use crate::data::transform::{InverseForm, Transform};
-use crate::eval::loo::LOG_REL_OFFSET;
 use crate::simd::fastlog::log1p;
+
+/// The offset `e` of the log-relative error
+/// [`Errors::log_rel`](super::loo::Errors::log_rel).
+pub const LOG_REL_OFFSET: f64 = 1e-3;
 
 /// The store rows of a block: consecutive from a first, or listed.
 #[derive(Clone, Copy)]
