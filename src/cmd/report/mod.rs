@@ -78,7 +78,8 @@ pub struct Args {
     /// 128 x 128 for the sample sweep and the map methods, 1024 x 1024 maps
     /// in the size sweep and a 10 x 10 plausibility grid instead of 6 x 6;
     /// several times as long as the default, most of it the prepared map
-    /// (135 s instead of 22 s for 12 materials at 45 x 45 x 90).
+    /// (135 s against 22 s for 12 materials at 45 x 45 x 90 on a loaded
+    /// 2-core machine).
     #[arg(long)]
     pub thorough: bool,
     /// Optimiser of the fits for q = 1..Q (the other one fits q = 2 as well;
