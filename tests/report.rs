@@ -49,8 +49,40 @@ fn report_writes_every_file_and_fails_atomically() {
         "Leave-one-out",
         "L-BFGS",
         "f64",
+        "on every 4th phi_d bin (`--quick`)",
+        "a 3 x 3 grid over the map's default view",
     ] {
         assert!(md.contains(want), "report.md lacks {want:?}:\n{md}");
+    }
+    // How long each section took: a row per section, each with a time.
+    let times = md
+        .split("## Time by section")
+        .nth(1)
+        .unwrap_or_else(|| panic!("report.md lacks the section times:\n{md}"));
+    for section in [
+        "Opening and validating the files",
+        "Fidelity: the settings compared",
+        "Leave-one-out and fits, log transform",
+        "Leave-one-out and fits, raw transform",
+        "Fitting: Hooke-Jeeves' minimum step sweep",
+        "Store precision",
+        "Albedo map: sample count vs error vs time",
+        "Albedo map: the default method and the prepared map",
+        "Albedo map: size vs time",
+        "Plausibility grid",
+        "Tables and plots",
+    ] {
+        let line = times
+            .lines()
+            .find(|l| l.starts_with(&format!("| {section}")))
+            .unwrap_or_else(|| panic!("no time for {section:?}:\n{times}"));
+        let secs: f64 = line
+            .trim_end_matches(" s |")
+            .rsplit("| ")
+            .next()
+            .and_then(|t| t.parse().ok())
+            .unwrap_or_else(|| panic!("{line}"));
+        assert!(secs >= 0.0, "{line}");
     }
     // Every image the report links is there and decodes.
     for png in [
@@ -241,6 +273,10 @@ fn growth_section_matches_fit_on_the_same_materials() {
         md.contains("## Growth with the number of materials"),
         "{md}"
     );
+    assert!(
+        md.contains("| Growth: fits of synthetic databases | "),
+        "the growth section's time: {md}"
+    );
     assert!(rep.join("growth.png").is_file());
     let csv = std::fs::read_to_string(rep.join("growth.csv")).unwrap();
     let rows: Vec<Vec<&str>> = csv
@@ -295,4 +331,16 @@ fn growth_section_matches_fit_on_the_same_materials() {
     let (_, stderr) = texts(&bad);
     assert_eq!(bad.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("--growth"), "{stderr}");
+    // --quick and --thorough ask for opposite things.
+    let both = brdf_atlas([
+        "report".as_ref(),
+        merl.as_os_str(),
+        "-o".as_ref(),
+        tmp.path().join("both").as_os_str(),
+        "--quick".as_ref(),
+        "--thorough".as_ref(),
+    ]);
+    let (_, stderr) = texts(&both);
+    assert_eq!(both.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("--thorough"), "{stderr}");
 }

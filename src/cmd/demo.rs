@@ -242,6 +242,7 @@ fn write_report(state: &mut State) -> Result<(), Error> {
         q_max: None,
         quick: true,
         prepare: false,
+        thorough: false,
         optimizer: OptimizerArg::Lbfgs,
         growth: Vec::new(),
     };

@@ -11,6 +11,7 @@ use brdf_atlas_core::{
 };
 
 use brdf_merl::Quadrature;
+use rayon::prelude::*;
 
 use super::measure::{MethodRow, Results, SampleRow, SizeRow};
 use super::plan::Plan;
@@ -28,8 +29,9 @@ pub fn samples(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error>
         .collect();
     let dense = Quadrature::dense(model.dims(), 1);
     let t = Instant::now();
+    // The references are independent: one a thread.
     let reference = pixels
-        .iter()
+        .par_iter()
         .map(|&(px, py)| {
             reference_albedo(
                 model,
@@ -90,13 +92,24 @@ pub fn methods(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error>
             .map(|_| (next(), next()))
             .collect();
         let reference = pixels
-            .iter()
+            .par_iter()
             .map(|&(px, py)| {
                 let x = view.pixel_to_latent(px as f64, py as f64, size, size);
                 reference_albedo(model, &x, BlendRule::default(), model.albedo_rule())
             })
             .collect::<Result<Vec<_>, _>>()?;
         for samples in [None, Some(DEFAULT_SAMPLES)] {
+            // A default that is the per-pixel rule at the default samples
+            // is the next row's map: measured once, shown in both rows.
+            if let (Some(_), Some(last)) = (samples, r.methods.last())
+                && last.view == name
+                && last.method == format!("default (per pixel, {DEFAULT_SAMPLES} samples)")
+            {
+                let mut row = last.clone();
+                row.method = format!("per pixel, {DEFAULT_SAMPLES} samples");
+                r.methods.push(row);
+                continue;
+            }
             let t = Instant::now();
             let map = model.albedo_map(size, size, view, samples, &NoProgress)?;
             let first = t.elapsed();
@@ -149,13 +162,26 @@ pub fn methods(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error>
     Ok(())
 }
 
-/// The time of a map of each size, log (default samples) and raw (linear).
+/// The time of a map of each size, log (default samples; the sample
+/// sweep's at its size) and raw (linear).
 pub fn sizes(log: &Model, raw: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error> {
     let view = View::default();
+    // The sample sweep timed this map already at its size.
+    let swept = r
+        .samples
+        .iter()
+        .find(|m| m.samples == DEFAULT_SAMPLES)
+        .map(|m| m.time);
     for &s in &plan.sizes {
-        let (_, t) = timed(plan.repeat, || {
-            Ok(log.albedo_map(s, s, view, Some(DEFAULT_SAMPLES), &NoProgress)?)
-        })?;
+        let t = match swept {
+            Some(t) if s == plan.timed_size => t,
+            _ => {
+                timed(plan.repeat, || {
+                    Ok(log.albedo_map(s, s, view, Some(DEFAULT_SAMPLES), &NoProgress)?)
+                })?
+                .1
+            }
+        };
         r.sizes.push(SizeRow {
             method: format!("log, {DEFAULT_SAMPLES} samples"),
             size: s,

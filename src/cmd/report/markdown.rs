@@ -48,9 +48,12 @@ pub fn write(
         std::thread::available_parallelism().map_or(0, |p| p.get()),
         rayon::current_num_threads(),
         if plan.repeat {
-            " (the median of three when a run takes under 0.7 s)"
+            format!(
+                " (the median of three when a run takes under {})",
+                secs(super::plan::REPEAT_BELOW)
+            )
         } else {
-            ""
+            String::new()
         }
     )?;
     writeln!(
@@ -63,9 +66,27 @@ pub fn write(
     leave_one_out(w, plan, r)?;
     fits(w, r)?;
     maps(w, plan, r)?;
-    super::plausible::markdown(w, r)?;
+    super::plausible::markdown(w, r, plan.plausibility_grid)?;
     precision(w, r)?;
-    super::growth::markdown(w, r)
+    super::growth::markdown(w, r)?;
+    times(w, r, total)
+}
+
+/// How long each section took, in the order run.
+fn times(w: &mut dyn Write, r: &Results, total: Duration) -> io::Result<()> {
+    writeln!(w, "\n## Time by section\n")?;
+    writeln!(
+        w,
+        "Wall time of each part of this run, in the order run (the rest of the {} in \
+         all: writing this file and moving the report into place).\n",
+        secs(total)
+    )?;
+    head(w, &["section", "time"])?;
+    row(w, &[&"Opening and validating the files", &secs(r.scan)])?;
+    for (name, time) in &r.times {
+        row(w, &[name, &secs(*time)])?;
+    }
+    Ok(())
 }
 
 /// Leave-one-out errors of the GPLVM and PCA by latent dimension.
@@ -97,14 +118,21 @@ fn leave_one_out(w: &mut dyn Write, plan: &Plan, r: &Results) -> io::Result<()> 
     writeln!(
         w,
         "Metrics, over all materials and the {} of {} table values that some input \
-         measured and that are not grazing (`cos_i cos_o >= 1e-6`): **reflectance \
+         measured and that are not grazing (`cos_i cos_o >= 1e-6`){}: **reflectance \
          RMSE** in 1/sr (the prediction inverted from the model's transform per value \
          and clamped to >= 0, as `reconstruct` writes it; highlights dominate it) and \
          **cosine-weighted log RMSE**, the RMSE of `log(1 + f cos_i cos_o)` \
          (Sztrajman et al. 2021). The reference values are the materials as stored \
          (f32, unmeasured samples read as 0). The transformed-space RMSE is over all \
-         values.\n",
-        r.scored_rows, r.d
+         values{}.\n",
+        r.scored_rows,
+        r.d,
+        if plan.quarter {
+            ", on every 4th phi_d bin (`--quick`)"
+        } else {
+            ""
+        },
+        if plan.quarter { " of those bins" } else { "" }
     )?;
     head(
         w,
@@ -372,7 +400,7 @@ fn methods(w: &mut dyn Write, r: &Results) -> io::Result<()> {
              (the per-pixel rule: {}, {} off); the whole default view is not: its albedo has \
              more detail than a field within budget resolves, so it is integrated per pixel \
              in {}, up to {} off, until the model's map is prepared (`brdf-atlas prepare`; \
-             `report --prepare` measures it under --quick).",
+             `report --prepare` or `--thorough` measures it here).",
             secs(f.first),
             secs(f.again),
             pct(f.max_err),

@@ -9,7 +9,7 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use brdf_atlas_core::BlendRule;
-use brdf_atlas_core::loo::{self, Evaluation};
+use brdf_atlas_core::loo::{self, Evaluation, Every};
 use brdf_atlas_core::{
     Dataset, Fit, GplvmParams, GramData, Model, ModelFile, NoProgress, OptimizerKind, Precision,
     Store, StoreRef, TransformKind, build_store,
@@ -81,6 +81,7 @@ pub struct SampleRow {
 
 /// A map method at a view: the default (the albedo field where it fits its
 /// budget) or the per-pixel rule, its error and time.
+#[derive(Clone)]
 pub struct MethodRow {
     /// "default" or "1/100".
     pub view: &'static str,
@@ -157,6 +158,8 @@ pub struct Results {
     pub kept_label: &'static str,
     /// Fits of synthetic databases by size (`--growth`).
     pub growth: Vec<super::growth::GrowthRow>,
+    /// Wall time of each section of the report, in the order run.
+    pub times: Vec<(String, Duration)>,
 }
 
 impl Results {
@@ -168,16 +171,45 @@ impl Results {
     }
 }
 
-/// Progress lines, `[   12.3 s] what`, timed from the start of the run.
+/// Progress lines, `[   12.3 s] what`, timed from the start of the run,
+/// and the wall time of each section of the report.
 pub struct Steps<'a> {
     start: Instant,
     out: &'a mut dyn Write,
+    /// The sections so far: name, start and (once the next began) time.
+    sections: Vec<(String, Instant, Option<Duration>)>,
 }
 
 impl<'a> Steps<'a> {
     /// Lines to `out`, timed from `start`.
     pub fn new(start: Instant, out: &'a mut dyn Write) -> Steps<'a> {
-        Steps { start, out }
+        Steps {
+            start,
+            out,
+            sections: Vec::new(),
+        }
+    }
+
+    /// Start timing the next section (and stop the one before).
+    pub fn section(&mut self, name: impl Into<String>) {
+        self.close();
+        self.sections.push((name.into(), Instant::now(), None));
+    }
+
+    /// Stop the running section, if any.
+    fn close(&mut self) {
+        if let Some((_, t, time @ None)) = self.sections.last_mut() {
+            *time = Some(t.elapsed());
+        }
+    }
+
+    /// Each section's name and wall time, in order.
+    pub fn times(&mut self) -> Vec<(String, Duration)> {
+        self.close();
+        self.sections
+            .iter()
+            .map(|(name, _, time)| (name.clone(), time.unwrap_or_default()))
+            .collect()
     }
 
     /// Announce the next step.
@@ -212,6 +244,7 @@ pub fn measure(
     let raw = per_transform(data, TransformKind::Raw, plan, work, steps, r)?;
 
     // Store precision: the log store again in f64, the same latent points.
+    steps.section("Store precision: the f64 store, f32 vs f64 reconstructions");
     steps.say("log transform: f64 store, f32 vs f64 reconstructions")?;
     let (store64, _, y64) = build(data, TransformKind::Log, Precision::F64, work, r)?;
     r.gram_rel_diff = (&log.y - &y64).norm_max() / log.y.norm_max();
@@ -230,14 +263,18 @@ pub fn measure(
     drop(store64);
 
     if let Some((log_model, raw_model)) = &models {
+        steps.section("Albedo map: sample count vs error vs time");
         steps.say("albedo map: sample count vs error vs time")?;
         super::maps::samples(log_model, plan, r)?;
+        steps.section("Albedo map: the default method and the prepared map");
         steps.say(
             "albedo map: the albedo field and the prepared lattice against the per-pixel rule",
         )?;
         super::maps::methods(log_model, plan, r)?;
+        steps.section("Albedo map: size vs time");
         steps.say("albedo map: size vs time")?;
         super::maps::sizes(log_model, raw_model, plan, r)?;
+        steps.section("Plausibility grid");
         steps.say(&format!(
             "plausibility at {0} x {0} points of the map, each model, every blend rule",
             plan.plausibility_grid
@@ -283,6 +320,9 @@ fn per_transform(
     r: &mut Results,
 ) -> Result<Transformed, Error> {
     let name = transform.name();
+    steps.section(format!(
+        "Leave-one-out and fits, {name} transform: store, fits, leave-one-out pass"
+    ));
     steps.say(&format!("{name} transform: store and Gram matrix"))?;
     let (store, gram, y) = build(data, transform, Precision::F32, work, r)?;
     steps.say(&format!("{name} transform: fits for q = 1..{}", plan.q_max))?;
@@ -397,11 +437,17 @@ fn per_transform(
     ))?;
     let bars = Bars::new("leave-one-out");
     let t = Instant::now();
-    let ev = loo::evaluate_mixed(&store, &predictors, &mixes, &bars)?;
+    let every = if plan.quarter {
+        Every::QUARTER
+    } else {
+        Every::BIN
+    };
+    let ev = loo::evaluate_some(&store, &predictors, &mixes, None, every, &bars)?;
     r.loo_times.push((transform, predictors.len(), t.elapsed()));
     drop(bars);
     record_loo(r, transform, &labels, &ev, y.as_ref())?;
     if transform == TransformKind::Log {
+        steps.section("Fitting: Hooke-Jeeves' minimum step sweep");
         steps.say("log transform: Hooke-Jeeves minimum step sweep (q = 2)")?;
         if plan.q_max >= 2 {
             for &m in &plan.min_steps {

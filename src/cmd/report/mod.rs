@@ -44,9 +44,10 @@ use crate::progress::Bars;
 /// of the GPLVM (closed form, no refit) for q = 1..Q and both transforms,
 /// beside PCA with as many components; Hooke-Jeeves vs L-BFGS and
 /// Hooke-Jeeves' minimum step (cost reached vs time); the albedo map's
-/// error and time vs quadrature samples, the prepared map's against it (its
-/// lattice built once, minutes at full resolution; not under --quick unless
-/// --prepare) and its time vs size; f32 vs f64 stores. Writes REPORT_DIR/report.md, CSV files and PNG plots. Needs
+/// error and time vs quadrature samples, the default method against the
+/// per-pixel rule (and the prepared map, with --prepare or --thorough) and
+/// its time vs size; the plausibility of a grid of map points; f32 vs f64
+/// stores; how long each section took. Writes REPORT_DIR/report.md, CSV files and PNG plots. Needs
 /// disk for the stores it builds (about 4 times the MERL files' size in
 /// f32) in a staging directory beside REPORT_DIR, removed at the end;
 /// REPORT_DIR appears (or replaces an earlier report) only when complete.
@@ -60,15 +61,27 @@ pub struct Args {
     pub out: PathBuf,
     #[arg(long, help = plan::q_max_help(), value_parser = clap::value_parser!(u32).range(1..=MAX_Q as i64))]
     pub q_max: Option<u32>,
-    /// Fewer settings (sample counts, map sizes, steps): a report in seconds on small data.
-    /// It leaves the prepared map out unless --prepare is given.
-    #[arg(long)]
+    /// Fewer settings (sample counts, map sizes, steps, a 3 x 3 plausibility
+    /// grid, leave-one-out errors on every 4th phi_d bin): a report in
+    /// seconds on small data. It leaves the prepared map out unless
+    /// --prepare is given.
+    #[arg(long, conflicts_with = "thorough")]
     pub quick: bool,
-    /// Measure the prepared map (`brdf-atlas prepare`) under --quick too:
-    /// preparing its lattice takes minutes at full resolution (2.4 minutes
-    /// for the demo's 16 materials, 8 - 12 for 100).
+    /// Measure the prepared map (`brdf-atlas prepare`) beside the default
+    /// method: preparing its lattice takes most of a minute for 12 small
+    /// materials, minutes at full resolution (2.4 minutes for the demo's 16
+    /// materials, 8 - 12 for 100).
     #[arg(long)]
     pub prepare: bool,
+    /// The costliest sweeps too: the prepared map (as --prepare), 4096
+    /// quadrature samples in the sample sweep, 256 x 256 maps instead of
+    /// 128 x 128 for the sample sweep and the map methods, 1024 x 1024 maps
+    /// in the size sweep and a 10 x 10 plausibility grid instead of 6 x 6;
+    /// several times as long as the default, most of it the prepared map
+    /// (135 s against 22 s for 12 materials at 45 x 45 x 90 on a loaded
+    /// 2-core machine).
+    #[arg(long)]
+    pub thorough: bool,
     /// Optimiser of the fits for q = 1..Q (the other one fits q = 2 as well;
     /// maps and the precision comparison use the fit of `fit`'s default, L-BFGS).
     #[arg(long, value_enum, default_value_t = OptimizerArg::Lbfgs)]
@@ -143,12 +156,17 @@ pub fn write(args: &Args, say: &mut dyn Write) -> Result<Summary, Error> {
     let plan = Plan::new(args, n);
     drop(bars);
     let mut steps = Steps::new(start, say);
+    steps.section("Fidelity: the settings compared");
     fidelity::measure(&args.dir, &work, args.quick, &mut steps, &mut r)?;
     measure::measure(&data, &plan, &work, &mut steps, &mut r)?;
     let sizes: Vec<usize> = args.growth.iter().map(|&n| n as usize).collect();
-    growth::measure(&sizes, &work, &mut steps, &mut r)?;
+    if !sizes.is_empty() {
+        steps.section("Growth: fits of synthetic databases");
+        growth::measure(&sizes, &work, &mut steps, &mut r)?;
+    }
     std::fs::remove_dir_all(&work).map_err(|source| Error::Write { path: work, source })?;
 
+    steps.section("Tables and plots");
     steps.say("writing tables and plots")?;
     let dir = staged.path();
     csv::write_all(dir, &r)?;
@@ -161,6 +179,7 @@ pub fn write(args: &Args, say: &mut dyn Write) -> Result<Summary, Error> {
         growth::csv(dir, &r)?;
         growth::picture(dir, &r)?;
     }
+    r.times = steps.times();
     let total = start.elapsed();
     let load_end = machine::load_average();
     write_file(&dir.join("report.md"), |w| {
@@ -209,7 +228,8 @@ pub(super) fn write_file(
     })
 }
 
-/// Median wall time of `f`: once, or three times when one run is short and `repeat`.
+/// Median wall time of `f`: once, or three times when one run is short
+/// (under [`plan::REPEAT_BELOW`]) and `repeat`.
 pub(super) fn timed<T>(
     repeat: bool,
     mut f: impl FnMut() -> Result<T, Error>,
@@ -217,7 +237,7 @@ pub(super) fn timed<T>(
     let t = Instant::now();
     let v = f()?;
     let first = t.elapsed();
-    if !repeat || first > Duration::from_millis(700) {
+    if !repeat || first > plan::REPEAT_BELOW {
         return Ok((v, first));
     }
     let mut times = vec![first];

@@ -1,6 +1,8 @@
 //! What the report runs: the settings each part sweeps, from the command's
 //! arguments and the number of materials.
 
+use std::time::Duration;
+
 use brdf_atlas_core::OptimizerKind;
 
 use super::Args;
@@ -42,7 +44,19 @@ pub struct Plan {
     pub plausibility_grid: usize,
     /// Measure the prepared map (its lattice takes minutes to build).
     pub prepare: bool,
+    /// Score the leave-one-out passes on every 4th phi_d bin only.
+    pub quarter: bool,
 }
+
+/// A run shorter than this is timed three times under `repeat` (the median kept).
+pub const REPEAT_BELOW: Duration = Duration::from_millis(250);
+
+/// The sample count `--thorough` adds to the sample sweep.
+pub const THOROUGH_SAMPLES: usize = 4096;
+/// The map size `--thorough` adds to the size sweep.
+pub const THOROUGH_SIZE: usize = 1024;
+/// The plausibility grid's side by default and under `--thorough`.
+pub const PLAUSIBILITY_GRID: [usize; 2] = [6, 10];
 
 impl Plan {
     /// The plan for `args` on `n` materials.
@@ -58,7 +72,7 @@ impl Plan {
         let q_max = asked.min(n.saturating_sub(1)).max(1);
         let optimizer = args.optimizer.into();
         if args.quick {
-            Plan {
+            return Plan {
                 q_max,
                 optimizer,
                 min_steps: vec![1e-1, 1e-2, 1e-3],
@@ -70,21 +84,28 @@ impl Plan {
                 repeat: false,
                 plausibility_grid: 3,
                 prepare: args.prepare,
-            }
-        } else {
-            Plan {
-                q_max,
-                optimizer,
-                min_steps: vec![1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4],
-                samples: vec![16, 64, 256, 1024, 4096],
-                sizes: vec![128, 256, 512, 1024],
-                grid: 4,
-                timed_size: 256,
-                points: 4,
-                repeat: true,
-                plausibility_grid: 10,
-                prepare: true,
-            }
+                quarter: true,
+            };
+        }
+        let mut samples = vec![16, 64, 256, 1024];
+        let mut sizes = vec![128, 256, 512];
+        if args.thorough {
+            samples.push(THOROUGH_SAMPLES);
+            sizes.push(THOROUGH_SIZE);
+        }
+        Plan {
+            q_max,
+            optimizer,
+            min_steps: vec![1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4],
+            samples,
+            sizes,
+            grid: 4,
+            timed_size: if args.thorough { 256 } else { 128 },
+            points: 4,
+            repeat: true,
+            plausibility_grid: PLAUSIBILITY_GRID[usize::from(args.thorough)],
+            prepare: args.prepare || args.thorough,
+            quarter: false,
         }
     }
 

@@ -19,10 +19,11 @@ fn quantile(sorted: &[f64], p: f64) -> f64 {
 }
 
 /// The section of report.md.
-pub fn markdown(w: &mut dyn Write, r: &Results) -> io::Result<()> {
+pub fn markdown(w: &mut dyn Write, r: &Results, grid: usize) -> io::Result<()> {
     if r.plausibility.is_empty() {
         return Ok(());
     }
+    let thorough = super::plan::PLAUSIBILITY_GRID[1];
     writeln!(
         w,
         "## Plausibility: is every point of the map a physical material?\n"
@@ -30,8 +31,8 @@ pub fn markdown(w: &mut dyn Write, r: &Results) -> io::Result<()> {
     writeln!(
         w,
         "![Clamped share of reflectance over the map](plausibility.png)\n\n\
-         At the centres of a grid over the map's default view, each point's material \
-         is reconstructed with the soft floor (`floor`, the default: the GP's blend with \
+         At the centres of a {grid} x {grid} grid over the map's default view (`--thorough`: \
+         {thorough} x {thorough}), each point's material is reconstructed with the soft floor (`floor`, the default: the GP's blend with \
          each value lifted softly onto a floor at 0.3 times a convex blend's), with the \
          GP's weights as they are (`--blend gp`) and with the plausible rule (`--blend \
          plausible`: in each theta_h bin of the table where the clamp would remove more \
@@ -196,11 +197,16 @@ pub fn measure(
     r: &mut Results,
 ) -> Result<(), Error> {
     let points = grid_points(grid);
+    // The predictive variance depends on the point, not on the rule.
+    let variance = points
+        .iter()
+        .map(|x| Ok(model.at(x)?.confidence().variance))
+        .collect::<Result<Vec<f64>, Error>>()?;
     for rule in RULES {
         // The figures of every point from one pass over the store (the
         // plausible rule: its steps from one pass, then a pass a point).
         let figures = model.plausibilities(&points, rule)?;
-        for (&x, p) in points.iter().zip(figures) {
+        for ((&x, p), &variance) in points.iter().zip(figures).zip(&variance) {
             r.plausibility.push(PlausibilityRow {
                 transform,
                 kernel,
@@ -209,7 +215,7 @@ pub fn measure(
                 clamped_reflectance: p.clamped_reflectance,
                 clamped_values: p.clamped_values,
                 max_albedo: p.max_albedo,
-                variance: model.at(&x)?.confidence().variance,
+                variance,
             });
         }
     }

@@ -201,11 +201,18 @@ impl Blend<'_> {
             .collect();
         let mut sums = ClampSums::default();
         parts.iter().for_each(|p| sums.merge(p));
-        let rule = model.directional_rule();
-        let (max_albedo, max_albedo_incidence) =
-            largest(&rule.integrate(|b| self.rgb_once(b).unwrap_or([0.0; 3])));
+        let (max_albedo, max_albedo_incidence) = self.largest_albedo();
         model.verify()?;
         Ok(sums.figures(max_albedo, max_albedo_incidence))
+    }
+
+    /// The largest directional albedo of this material and its incidence
+    /// (degrees from the normal): [`Blend::plausibility`]'s albedo figures
+    /// without its pass over the store (point queries at the bins of the
+    /// directional-albedo rule only).
+    pub fn largest_albedo(&self) -> (f64, f64) {
+        let rule = self.model().directional_rule();
+        largest(&rule.integrate(|b| self.rgb_once(b).unwrap_or([0.0; 3])))
     }
 }
 

@@ -8,7 +8,7 @@
 //! product instead of `m` passes. The largest directional albedo reads only
 //! the directional rule's bins, point by point.
 
-use brdf_merl::directional::largest;
+use rayon::prelude::*;
 
 use crate::dense::product::matmul;
 use crate::error::Result;
@@ -91,14 +91,12 @@ impl Model {
         for part in parts {
             sums.iter_mut().zip(&part).for_each(|(s, p)| s.merge(p));
         }
-        let directional = self.directional_rule();
+        // The points' largest albedos are independent: one a thread.
         let out = points
-            .iter()
+            .par_iter()
             .zip(sums)
             .map(|(x, s)| {
-                let blend = self.at_with(x, rule)?;
-                let (max_albedo, max_albedo_incidence) =
-                    largest(&directional.integrate(|b| blend.rgb_once(b).unwrap_or([0.0; 3])));
+                let (max_albedo, max_albedo_incidence) = self.at_with(x, rule)?.largest_albedo();
                 Ok(s.figures(max_albedo, max_albedo_incidence))
             })
             .collect::<Result<Vec<_>>>()?;
