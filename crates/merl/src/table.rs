@@ -13,33 +13,18 @@ use brdf_mapguard::{GuardedMap, Watch};
 
 use crate::angles::{Dims, MAX_DIM, Vec3};
 use crate::error::{MerlError, Result};
-pub use crate::values::{MAX_REFLECTANCE, is_invalid, is_non_finite, is_suspect};
+pub use crate::values::{
+    CHANNELS, MAX_REFLECTANCE, SCALE, is_invalid, is_non_finite, is_suspect, physical,
+    raw_from_physical,
+};
 use crate::values::{first_out_of_range, scan_values};
 use brdf_atomic::{PendingFile, stage};
 
 /// Bytes of the header.
 pub const HEADER_BYTES: usize = 12;
 
-/// MERL's per-channel scales from raw file units to reflectance (1/sr).
-pub const SCALE: [f64; 3] = [1.0 / 1500.0, 1.15 / 1500.0, 1.66 / 1500.0];
-
 /// The value MERL writes where a sample was not measured.
 pub const INVALID: f64 = -1.0;
-
-/// Channel names, for messages.
-pub const CHANNELS: [&str; 3] = ["red", "green", "blue"];
-
-/// Raw file value of `channel` -> reflectance. The one place the scales apply.
-#[inline]
-pub fn physical(channel: usize, raw: f64) -> f64 {
-    raw * SCALE[channel]
-}
-
-/// Reflectance of `channel` -> raw file value (inverse of [`physical`]).
-#[inline]
-pub fn raw_from_physical(channel: usize, value: f64) -> f64 {
-    value / SCALE[channel]
-}
 
 /// Does `bytes` start like a Git LFS pointer file (the small text file a
 /// repository holds in place of a large file until `git lfs pull` fetches it)?

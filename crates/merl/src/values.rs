@@ -1,4 +1,5 @@
-//! Which raw values a MERL file may hold: finite, and no reflectance
+//! MERL's raw values: their per-channel scales to reflectance, and which a
+//! file may hold: finite, and no reflectance
 //! beyond [`MAX_REFLECTANCE`]; negative values mark unmeasured bins. The
 //! readers' scans ([`crate::MerlFile::open`], and a fit's store pass in
 //! runs) test every value cheaply and branch-free, and name the first one
@@ -8,7 +9,24 @@ use std::path::Path;
 
 use crate::angles::Dims;
 use crate::error::{MerlError, Result};
-use crate::table::{CHANNELS, SCALE, physical};
+
+/// MERL's per-channel scales from raw file units to reflectance (1/sr).
+pub const SCALE: [f64; 3] = [1.0 / 1500.0, 1.15 / 1500.0, 1.66 / 1500.0];
+
+/// Channel names, for messages.
+pub const CHANNELS: [&str; 3] = ["red", "green", "blue"];
+
+/// Raw file value of `channel` -> reflectance. The one place the scales apply.
+#[inline]
+pub fn physical(channel: usize, raw: f64) -> f64 {
+    raw * SCALE[channel]
+}
+
+/// Reflectance of `channel` -> raw file value (inverse of [`physical`]).
+#[inline]
+pub fn raw_from_physical(channel: usize, value: f64) -> f64 {
+    value / SCALE[channel]
+}
 
 /// Is `v` infinite or NaN? Branch-free on the bits, so loops that OR it
 /// over many values vectorise (the readers' validity scans).

@@ -6,7 +6,7 @@ use std::io::Write;
 use std::path::Path;
 use std::time::Duration;
 
-use super::measure::Results;
+use super::results::Results;
 use super::write_file;
 use crate::error::Error;
 use crate::format::coordinates;

@@ -8,30 +8,22 @@
 
 use std::io::{self, Write};
 use std::path::Path;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
-use brdf_atlas_core::fidelity::{Judged, Spacing, Summary, fidelity, known_share, spacing};
+use brdf_atlas_core::fidelity::{Summary, fidelity, known_share, spacing};
 use brdf_atlas_core::loo::Every;
 use brdf_atlas_core::{
     BlendRule, DEFAULT_NOISE, DEFAULT_TRANSFORM, FitOptions, GplvmParams, Kernel, Model,
-    NoProgress, PAPER_KERNEL, PAPER_TRANSFORM, Precision, StorePolicy, TransformKind, View,
-    default_kernel, fit_dir_with,
+    NoProgress, PAPER_KERNEL, PAPER_TRANSFORM, Precision, StorePolicy, View, default_kernel,
+    fit_dir_with,
 };
 use brdf_merl::synth::SplitMix64;
 use rayon::prelude::*;
 
-use super::measure::{Results, Steps};
 use super::plot::{Axis, COLORS, Series, chart};
+use super::results::{FidelityRow as Row, Results, Setting};
+use super::steps::Steps;
 use crate::error::Error;
-
-/// One setting compared.
-#[derive(Debug, Clone, Copy)]
-pub struct Setting {
-    pub transform: TransformKind,
-    pub kernel: Kernel,
-    /// What the report calls it.
-    pub label: &'static str,
-}
 
 /// The settings compared for `n` materials: the paper's, the default, and
 /// a step of each between them.
@@ -71,24 +63,6 @@ pub fn settings(n: usize) -> [Setting; 5] {
 
 /// Random points of the default view whose materials' plausibility is measured.
 const PLAUSIBILITY_POINTS: usize = 32;
-
-/// What one setting gave.
-#[derive(Debug, Clone)]
-pub struct Row {
-    pub setting: Setting,
-    /// Each material at its own point (the default rule).
-    pub own: Vec<Judged>,
-    /// Each material predicted from the others (the default rule).
-    pub held_out: Vec<Judged>,
-    /// How far apart the materials land.
-    pub spacing: Spacing,
-    /// Share of a 41 x 41 grid of the default view with predictive variance below 0.1.
-    pub known: f64,
-    /// Largest directional albedo at random points of the default view: 90th percentile and worst.
-    pub max_albedo: [f64; 2],
-    /// The fit (store pass, optimisation, own-point pass) and the leave-one-out pass.
-    pub fit_time: Duration,
-}
 
 /// Fit every setting on `dir` (one store per transform, in `work`) and
 /// measure it; with `quick`, the paper's, `rel-log` with the paper's

@@ -5,7 +5,7 @@
 
 use std::io::{self, Write};
 use std::path::Path;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use brdf_atlas_core::{
     DEFAULT_TRANSFORM, Dataset, GplvmParams, GramData, NoProgress, OptimizerKind, Precision,
@@ -13,8 +13,9 @@ use brdf_atlas_core::{
 };
 use brdf_merl::Dims;
 
-use super::measure::{Results, Steps};
 use super::plot::{Axis, COLORS, Series, chart};
+use super::results::{GrowthRow, Results};
+use super::steps::Steps;
 use super::write_file;
 use crate::error::Error;
 use crate::format::secs;
@@ -29,18 +30,6 @@ const DIMS: Dims = Dims {
 
 /// Seed of the synthetic databases (the same materials on every run).
 const SEED: u64 = 1;
-
-/// One fit of one size.
-#[derive(Debug, Clone)]
-pub struct GrowthRow {
-    pub n: usize,
-    pub optimizer: OptimizerKind,
-    /// The optimiser alone (the store pass and the Gram product are not in it).
-    pub time: Duration,
-    pub cost: f64,
-    pub evaluations: u64,
-    pub refactorisations: u64,
-}
 
 /// Fit a synthetic database of each of `sizes` materials with both
 /// optimisers, in `work` (removed as it goes).

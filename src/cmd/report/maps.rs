@@ -13,8 +13,8 @@ use brdf_atlas_core::{
 use brdf_merl::Quadrature;
 use rayon::prelude::*;
 
-use super::measure::{MethodRow, Results, SampleRow, SizeRow};
 use super::plan::Plan;
+use super::results::{MethodRow, Results, SampleRow, SizeRow};
 use super::timed;
 use crate::error::Error;
 use crate::progress::Bars;

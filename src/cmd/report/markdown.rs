@@ -8,8 +8,8 @@ use std::time::Duration;
 use brdf_atlas_core::{DEFAULT_SAMPLES, TransformKind};
 
 use super::Args;
-use super::measure::Results;
 use super::plan::Plan;
+use super::results::Results;
 use crate::format::{coordinates, g4, pct, secs, size};
 use crate::machine;
 

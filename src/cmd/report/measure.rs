@@ -4,11 +4,9 @@
 //! precision) is done once: each store and its Gram matrix is built once
 //! and every fit and the leave-one-out pass of that transform reuse it.
 
-use std::io::Write;
 use std::path::Path;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
-use brdf_atlas_core::BlendRule;
 use brdf_atlas_core::loo::{self, Evaluation, Every};
 use brdf_atlas_core::{
     Dataset, Fit, GplvmParams, GramData, Model, ModelFile, NoProgress, OptimizerKind, Precision,
@@ -17,208 +15,12 @@ use brdf_atlas_core::{
 use faer::Mat;
 
 use super::plan::Plan;
+use super::results::{FitRow, LooRow, PrecisionRow, Results, StoreRow};
+use super::steps::Steps;
 use super::timed;
 use crate::cmd::fit::DEFAULT_MIN_STEP;
 use crate::error::Error;
 use crate::progress::Bars;
-
-/// One fit of the latent points.
-pub struct FitRow {
-    pub transform: TransformKind,
-    pub q: usize,
-    pub optimizer: OptimizerKind,
-    pub min_step: f64,
-    pub time: Duration,
-    pub initial_cost: f64,
-    pub cost: f64,
-    pub evaluations: u64,
-}
-
-/// Leave-one-out errors of one method.
-pub struct LooRow {
-    pub transform: TransformKind,
-    /// `gplvm`, `gplvm-other` (the other optimiser) or `pca`.
-    pub method: &'static str,
-    pub q: usize,
-    /// Reflectance RMSE.
-    pub raw: f64,
-    /// Cosine-weighted log RMSE.
-    pub log: f64,
-    /// RMSE in the model's transformed space.
-    pub transformed: f64,
-    /// Per material: (reflectance RMSE, log RMSE).
-    pub materials: Vec<(f64, f64)>,
-    /// In-sample PCA RMSE in transformed space, from the discarded eigenvalues.
-    pub in_sample: Option<f64>,
-}
-
-/// Building one store.
-pub struct StoreRow {
-    pub transform: TransformKind,
-    pub precision: Precision,
-    pub time: Duration,
-    pub bytes: u64,
-}
-
-/// The f32 and f64 reconstruction of one latent point.
-pub struct PrecisionRow {
-    pub point: Vec<f64>,
-    pub max_abs: f64,
-    pub max_rel: f64,
-    pub rms: f64,
-    pub time32: Duration,
-    pub time64: Duration,
-}
-
-/// One sample count of the log map.
-pub struct SampleRow {
-    pub samples: usize,
-    pub bins: usize,
-    pub max_err: f64,
-    pub mean_err: f64,
-    pub time: Duration,
-}
-
-/// A map method at a view: the default (the albedo field where it fits its
-/// budget) or the per-pixel rule, its error and time.
-#[derive(Clone)]
-pub struct MethodRow {
-    /// "default" or "1/100".
-    pub view: &'static str,
-    pub method: String,
-    /// The method is the albedo field.
-    pub field: bool,
-    /// The method is the prepared map's lattice.
-    pub prepared: bool,
-    pub max_err: f64,
-    pub mean_err: f64,
-    /// The first map of the view (a field builds its nodes; the prepared
-    /// map's row includes preparing the lattice), and the next.
-    pub first: Duration,
-    pub again: Duration,
-}
-
-/// One map size.
-pub struct SizeRow {
-    pub method: String,
-    pub size: usize,
-    pub time: Duration,
-}
-
-/// One latent point of the plausibility grid under one blend rule.
-pub struct PlausibilityRow {
-    pub transform: TransformKind,
-    /// The model's kernel: `fixed` (l = 1, mu = 1e-4) or `learned`.
-    pub kernel: &'static str,
-    pub rule: BlendRule,
-    pub x: [f64; 2],
-    pub clamped_reflectance: f64,
-    pub clamped_values: f64,
-    pub max_albedo: f64,
-    pub variance: f64,
-}
-
-/// Everything measured.
-#[derive(Default)]
-pub struct Results {
-    pub names: Vec<String>,
-    /// The settings compared on how their markers give materials back.
-    pub fidelity: Vec<super::fidelity::Row>,
-    pub dims: String,
-    /// Values per material.
-    pub d: usize,
-    /// Opening and validating the files.
-    pub scan: Duration,
-    pub stores: Vec<StoreRow>,
-    pub fits: Vec<FitRow>,
-    pub loo: Vec<LooRow>,
-    /// Per transform: predictors of its leave-one-out pass, and its time.
-    pub loo_times: Vec<(TransformKind, usize, Duration)>,
-    pub scored_rows: usize,
-    /// Hooke-Jeeves' minimum step sweep.
-    pub sweep: Vec<FitRow>,
-    pub precision: Vec<PrecisionRow>,
-    pub gram_rel_diff: f64,
-    pub samples: Vec<SampleRow>,
-    pub reference_time: Duration,
-    pub reference_pixels: usize,
-    pub sizes: Vec<SizeRow>,
-    /// The default map method against the per-pixel rule, by view.
-    pub methods: Vec<MethodRow>,
-    /// Side of the maps of `methods`.
-    pub methods_size: usize,
-    /// The plausibility grid of each transform's q = 2 model, row by row
-    /// from the top, under each rule.
-    pub plausibility: Vec<PlausibilityRow>,
-    /// How spread each q = 2 model's map is: transform, kernel and the median
-    /// distance from a material to its nearest neighbour in the latent plane.
-    pub spread: Vec<(TransformKind, &'static str, f64)>,
-    /// The leave-one-out label of the q = 2 Hooke-Jeeves fit, whose model
-    /// the maps, the precision comparison and the plausible rule use.
-    pub kept_label: &'static str,
-    /// Fits of synthetic databases by size (`--growth`).
-    pub growth: Vec<super::growth::GrowthRow>,
-    /// Wall time of each section of the report, in the order run.
-    pub times: Vec<(String, Duration)>,
-}
-
-impl Results {
-    /// The leave-one-out row of `method` at `q` for transform `t`.
-    pub fn loo_row(&self, t: TransformKind, method: &str, q: usize) -> Option<&LooRow> {
-        self.loo
-            .iter()
-            .find(|l| l.transform == t && l.method == method && l.q == q)
-    }
-}
-
-/// Progress lines, `[   12.3 s] what`, timed from the start of the run,
-/// and the wall time of each section of the report.
-pub struct Steps<'a> {
-    start: Instant,
-    out: &'a mut dyn Write,
-    /// The sections so far: name, start and (once the next began) time.
-    sections: Vec<(String, Instant, Option<Duration>)>,
-}
-
-impl<'a> Steps<'a> {
-    /// Lines to `out`, timed from `start`.
-    pub fn new(start: Instant, out: &'a mut dyn Write) -> Steps<'a> {
-        Steps {
-            start,
-            out,
-            sections: Vec::new(),
-        }
-    }
-
-    /// Start timing the next section (and stop the one before).
-    pub fn section(&mut self, name: impl Into<String>) {
-        self.close();
-        self.sections.push((name.into(), Instant::now(), None));
-    }
-
-    /// Stop the running section, if any.
-    fn close(&mut self) {
-        if let Some((_, t, time @ None)) = self.sections.last_mut() {
-            *time = Some(t.elapsed());
-        }
-    }
-
-    /// Each section's name and wall time, in order.
-    pub fn times(&mut self) -> Vec<(String, Duration)> {
-        self.close();
-        self.sections
-            .iter()
-            .map(|(name, _, time)| (name.clone(), time.unwrap_or_default()))
-            .collect()
-    }
-
-    /// Announce the next step.
-    pub fn say(&mut self, text: &str) -> Result<(), Error> {
-        let t = self.start.elapsed().as_secs_f64();
-        writeln!(self.out, "[{t:7.1} s] {text}")?;
-        Ok(())
-    }
-}
 
 /// One transform's f32 store, its Gram data, and its q = 2 Hooke-Jeeves fit
 /// when the plan made one.

@@ -19,6 +19,8 @@ mod measure;
 mod plan;
 mod plausible;
 mod plot;
+mod results;
+mod steps;
 
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
@@ -30,8 +32,9 @@ use brdf_atlas_core::Dataset;
 use brdf_atlas_core::limits::MAX_Q;
 use brdf_atomic::{StagedDir, write_atomic};
 
-use self::measure::{Results, Steps};
 use self::plan::Plan;
+use self::results::Results;
+use self::steps::Steps;
 use crate::args::OptimizerArg;
 use crate::error::Error;
 use crate::format::secs;

@@ -9,7 +9,7 @@ use std::path::Path;
 use brdf_atlas_core::{BlendRule, Model, TransformKind, View};
 
 use super::csv::e;
-use super::measure::{PlausibilityRow, Results};
+use super::results::{PlausibilityRow, Results};
 use super::write_file;
 use crate::error::Error;
 

@@ -11,7 +11,7 @@ use brdf_atlas_core::{OptimizerKind, TransformKind};
 use plotters::prelude::*;
 use plotters::style::{FontStyle, register_font};
 
-use super::measure::{LooRow, Results, SampleRow};
+use super::results::{LooRow, Results, SampleRow};
 use super::write_file;
 use crate::error::Error;
 
