@@ -1,6 +1,8 @@
 """Threads: long calls release the GIL, and concurrent queries give the
-answers of serial ones."""
+answers of serial ones. No test depends on which thread the scheduler
+runs first."""
 
+import sys
 import threading
 from concurrent.futures import ThreadPoolExecutor
 
@@ -32,26 +34,31 @@ def test_concurrent_queries_agree_with_serial_ones(log_model):
 
 def test_a_long_eval_lets_python_threads_run(raw_model):
     """While one thread is inside a long eval, another runs Python code to
-    its end: with the GIL held it could not finish before the eval did."""
+    its end. Python asks a thread holding the GIL to let go only once per
+    switch interval; with the interval far beyond the eval's length, the
+    other thread can run during the eval only if the eval releases the GIL.
+    Had it held it, the eval would end first. Once the other thread has the
+    GIL it keeps it to its end, so the order is fixed either way."""
     wi, wo = directions(2_000_000, 5)
     events = []
-    started = threading.Event()
-
-    def long_call():
-        started.set()
-        raw_model.eval([0.0, 0.0], wi, wo)
-        events.append("eval done")
+    ready = threading.Event()
 
     def python_work():
-        started.wait()
+        ready.wait()  # blocks, without the GIL
         total = 0
         for k in range(200_000):
             total += k
         events.append("python done")
 
-    threads = [threading.Thread(target=long_call), threading.Thread(target=python_work)]
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join()
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(1000.0)
+    try:
+        other = threading.Thread(target=python_work)
+        other.start()
+        ready.set()
+        raw_model.eval([0.0, 0.0], wi, wo)
+        events.append("eval done")
+        other.join()
+    finally:
+        sys.setswitchinterval(interval)
     assert events == ["python done", "eval done"]
