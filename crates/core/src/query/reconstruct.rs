@@ -31,7 +31,7 @@ use rayon::prelude::*;
 use crate::data::store::Rows;
 use crate::error::Result;
 use crate::model::Model;
-use crate::query::floor::floor_capped;
+use crate::query::floor::{caps, floor_capped, floor_values};
 use crate::simd::dot;
 
 /// One latent point of a model, ready to answer queries.
@@ -281,12 +281,15 @@ impl<'m> Blend<'m> {
 
     /// [`Blend::transformed`] for rows `r0 .. r0 + out.len()`.
     pub fn transformed_rows(&self, r0: usize, out: &mut [f64]) {
+        if let (Some(v), None) = (&self.floor, &self.bands) {
+            return self.floor_rows(v, r0, out);
+        }
         self.blended_rows(r0, out);
         if let Some(v) = &self.floor {
             let store = self.model.store();
             let n = store.n();
-            // The convex blend a run at a time, on the stack.
-            let mut convex = [0.0f64; 256];
+            // The convex blend and the caps a run at a time, on the stack.
+            let (mut convex, mut top) = ([0.0f64; 256], [0.0f64; 256]);
             for (k, out) in out.chunks_mut(convex.len()).enumerate() {
                 let r = r0 + k * convex.len();
                 let (mean, c) = (&store.mean()[r..], &mut convex[..out.len()]);
@@ -294,10 +297,45 @@ impl<'m> Blend<'m> {
                     Rows::F32(z) => dot::rows(v, &z[r * n..], mean, c),
                     Rows::F64(z) => dot::rows(v, &z[r * n..], mean, c),
                 }
-                for (k, (o, &c)) in out.iter_mut().zip(c.iter()).enumerate() {
-                    *o = floor_capped(*o, c, mean[k] + row_top(store, r + k));
+                let top = &mut top[..out.len()];
+                let rows = r * n..(r + out.len()) * n;
+                match store.z() {
+                    Rows::F32(z) => caps(&z[rows], n, mean, top),
+                    Rows::F64(z) => caps(&z[rows], n, mean, top),
+                }
+                floor_values(out, c, top);
+            }
+        }
+    }
+
+    /// The floor rule's rows `r0 .. r0 + out.len()` with one set of GP
+    /// weights (no bands): the GP's and the convex blend from one read of
+    /// each row ([`dot::rows2`]), then the caps and the floor, a run at a
+    /// time on the stack. The same bits as the GP's pass and then the
+    /// floor's.
+    fn floor_rows(&self, v: &[f64], r0: usize, out: &mut [f64]) {
+        let store = self.model.store();
+        let n = store.n();
+        let (mut convex, mut top) = ([0.0f64; 256], [0.0f64; 256]);
+        for (k, out) in out.chunks_mut(convex.len()).enumerate() {
+            let r = r0 + k * convex.len();
+            let (mean, c, top) = (
+                &store.mean()[r..],
+                &mut convex[..out.len()],
+                &mut top[..out.len()],
+            );
+            let rows = r * n..(r + out.len()) * n;
+            match store.z() {
+                Rows::F32(z) => {
+                    dot::rows2(&self.weights, v, &z[rows.clone()], mean, out, c);
+                    caps(&z[rows], n, mean, top);
+                }
+                Rows::F64(z) => {
+                    dot::rows2(&self.weights, v, &z[rows.clone()], mean, out, c);
+                    caps(&z[rows], n, mean, top);
                 }
             }
+            floor_values(out, c, top);
         }
     }
 
@@ -442,9 +480,7 @@ impl<'m> Blend<'m> {
 fn row_top(store: &crate::data::Store, row: usize) -> f64 {
     let n = store.n();
     match store.z() {
-        Rows::F32(z) => z[row * n..(row + 1) * n]
-            .iter()
-            .fold(f64::NEG_INFINITY, |a, &b| a.max(f64::from(b))),
+        Rows::F32(z) => crate::query::floor::top_of(&z[row * n..(row + 1) * n]),
         Rows::F64(z) => crate::query::floor::top_of(&z[row * n..(row + 1) * n]),
     }
 }

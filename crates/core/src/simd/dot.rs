@@ -114,6 +114,90 @@ unsafe fn rows_avx2<T: Element>(w: &[f64], z: &[T], mean: &[f64], out: &mut [f64
     }
 }
 
+/// [`dot_avx2`] of two weight vectors against one row, which is loaded
+/// once: each sum in the same operations and order as its own call.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn dot2_avx2<T: Element>(w: &[f64], v: &[f64], z: &[T]) -> (f64, f64) {
+    use std::arch::x86_64::*;
+    let n = w.len();
+    let (z, v) = (&z[..n], &v[..n]);
+    let split = n / LANES * LANES;
+    let (mut wlo, mut whi) = (_mm256_setzero_pd(), _mm256_setzero_pd());
+    let (mut vlo, mut vhi) = (_mm256_setzero_pd(), _mm256_setzero_pd());
+    for k in (0..split).step_by(LANES) {
+        // SAFETY: k + 8 <= split <= n, the length of all three; AVX2 by
+        // the caller.
+        unsafe {
+            let b0 = T::load4(z[k..k + 4].try_into().unwrap_unchecked());
+            let b1 = T::load4(z[k + 4..k + 8].try_into().unwrap_unchecked());
+            let a0 = _mm256_loadu_pd(w[k..].as_ptr());
+            let a1 = _mm256_loadu_pd(w[k + 4..].as_ptr());
+            let c0 = _mm256_loadu_pd(v[k..].as_ptr());
+            let c1 = _mm256_loadu_pd(v[k + 4..].as_ptr());
+            wlo = _mm256_add_pd(wlo, _mm256_mul_pd(a0, b0));
+            whi = _mm256_add_pd(whi, _mm256_mul_pd(a1, b1));
+            vlo = _mm256_add_pd(vlo, _mm256_mul_pd(c0, b0));
+            vhi = _mm256_add_pd(vhi, _mm256_mul_pd(c1, b1));
+        }
+    }
+    let reduce = |lo: __m256d, hi: __m256d| {
+        let mut pair = [0.0f64; 4];
+        // SAFETY: `pair` holds 4 f64; AVX2 by the caller.
+        unsafe { _mm256_storeu_pd(pair.as_mut_ptr(), _mm256_add_pd(lo, hi)) };
+        (pair[0] + pair[1]) + (pair[2] + pair[3])
+    };
+    let (mut sw, mut sv) = (reduce(wlo, whi), reduce(vlo, vhi));
+    for k in split..n {
+        let b: f64 = z[k].into();
+        sw += w[k] * b;
+        sv += v[k] * b;
+    }
+    (sw, sv)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn rows2_avx2<T: Element>(
+    w: &[f64],
+    v: &[f64],
+    z: &[T],
+    mean: &[f64],
+    out_w: &mut [f64],
+    out_v: &mut [f64],
+) {
+    let n = w.len();
+    for (((ow, ov), m), row) in out_w.iter_mut().zip(out_v).zip(mean).zip(z.chunks_exact(n)) {
+        // SAFETY: AVX2 by the caller's contract.
+        let (sw, sv) = unsafe { dot2_avx2(w, v, row) };
+        (*ow, *ov) = (m + sw, m + sv);
+    }
+}
+
+/// [`rows`] of two weight vectors over the same rows, reading each row
+/// once: `out_w[j] = mean[j] + w . z_j` and `out_v[j] = mean[j] + v . z_j`,
+/// the same bits as two calls of [`rows`]. `v` is as long as `w`.
+pub fn rows2<T: Element>(
+    w: &[f64],
+    v: &[f64],
+    z: &[T],
+    mean: &[f64],
+    out_w: &mut [f64],
+    out_v: &mut [f64],
+) {
+    let (n, len) = (w.len(), out_w.len().min(out_v.len()));
+    let (z, mean, v) = (&z[..len * n], &mean[..len], &v[..n]);
+    let (out_w, out_v) = (&mut out_w[..len], &mut out_v[..len]);
+    #[cfg(target_arch = "x86_64")]
+    if super::has_avx2() {
+        // SAFETY: the CPU has AVX2 (checked just above).
+        return unsafe { rows2_avx2(w, v, z, mean, out_w, out_v) };
+    }
+    for (((ow, ov), m), row) in out_w.iter_mut().zip(out_v).zip(mean).zip(z.chunks_exact(n)) {
+        (*ow, *ov) = (m + dot_body(w, row), m + dot_body(v, row));
+    }
+}
+
 /// `w . z[..w.len()]`, f64 accumulation.
 #[inline]
 pub fn dot<T: Element>(w: &[f64], z: &[T]) -> f64 {
@@ -167,6 +251,35 @@ pub fn axpy<T: Element>(a: f64, z: &[T], acc: &mut [f64]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn two_weights_in_one_pass_give_the_bits_of_two_passes() {
+        for n in [1usize, 7, 8, 9, 100, 257] {
+            let w: Vec<f64> = (0..n).map(|i| ((i * 37 % 11) as f64 - 5.0) / 3.0).collect();
+            let v: Vec<f64> = (0..n).map(|i| ((i * 13 % 7) as f64 - 2.5) / 7.0).collect();
+            let rows_n = 5;
+            let z32: Vec<f32> = (0..rows_n * n).map(|i| (i as f32 * 0.37).sin()).collect();
+            let z64: Vec<f64> = z32.iter().map(|&x| f64::from(x) * 1.1).collect();
+            let mean: Vec<f64> = (0..rows_n).map(|i| i as f64 * 0.25 - 0.5).collect();
+            let (mut a, mut b) = (vec![0.0; rows_n], vec![0.0; rows_n]);
+            let (mut ow, mut ov) = (vec![0.0; rows_n], vec![0.0; rows_n]);
+            rows(&w, &z32, &mean, &mut a);
+            rows(&v, &z32, &mean, &mut b);
+            rows2(&w, &v, &z32, &mean, &mut ow, &mut ov);
+            assert_eq!(a, ow, "f32, n {n}");
+            assert_eq!(b, ov, "f32, n {n}");
+            rows(&w, &z64, &mean, &mut a);
+            rows(&v, &z64, &mean, &mut b);
+            rows2(&w, &v, &z64, &mean, &mut ow, &mut ov);
+            assert_eq!(a, ow, "f64, n {n}");
+            assert_eq!(b, ov, "f64, n {n}");
+            // The portable loop too.
+            for (j, row) in z64.chunks_exact(n).enumerate() {
+                assert_eq!(ow[j], mean[j] + dot_body(&w, row));
+                assert_eq!(ov[j], mean[j] + dot_body(&v, row));
+            }
+        }
+    }
 
     #[test]
     fn dot_matches_a_plain_sum_and_rows_match_dot() {
