@@ -54,7 +54,8 @@ pub fn write(
 ) -> Result<(), Error> {
     let t0 = Instant::now();
     let blend = model.at_with(x, rule)?;
-    let table = blend.table()?;
+    // The table and its plausibility figures from one pass over the store.
+    let (table, plausibility) = blend.table_and_plausibility()?;
     table.write(out)?;
     let elapsed = t0.elapsed();
     let weights = blend.weights();
@@ -92,7 +93,6 @@ pub fn write(
             brdf_atlas_core::floor::FLOOR_SHARE
         )?;
     }
-    let plausibility = blend.plausibility()?;
     let confidence = blend.confidence();
     writeln!(
         report,

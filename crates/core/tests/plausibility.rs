@@ -75,6 +75,15 @@ fn clamp_figures_equal_a_dense_recomputation() {
                 close(p.max_albedo, a) && p.max_albedo_incidence == deg,
                 "{x:?}"
             );
+            // The table and its figures from one pass: the same bits, for
+            // the GP's blend and the soft floor.
+            for rule in [BlendRule::Gp, BlendRule::Floor] {
+                let b = m.at_with(&x, rule).unwrap();
+                let (t, q) = b.table_and_plausibility().unwrap();
+                assert_eq!(t, b.table().unwrap(), "{transform:?} {x:?} {rule:?}");
+                let p = b.plausibility().unwrap();
+                assert_eq!(format!("{q:?}"), format!("{p:?}"), "{x:?} {rule:?}");
+            }
         }
         assert!(
             clamped_somewhere,

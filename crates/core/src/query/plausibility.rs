@@ -20,12 +20,15 @@ use brdf_merl::directional::largest;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use brdf_merl::MerlTable;
+
 use crate::error::Result;
 use crate::model::Model;
 use crate::query::reconstruct::Blend;
 
-/// Rows a worker handles at once (fixed, so sums do not depend on the thread count).
-const CHUNK: usize = 4096;
+/// Rows a worker handles at once (fixed, so sums do not depend on the thread
+/// count; the table's, so [`Blend::table_and_plausibility`] sums alike).
+const CHUNK: usize = crate::query::reconstruct::TABLE_CHUNK;
 
 /// Above this predictive variance (out of the prior's 1) a point is reported
 /// as one where the model knows little: the data explain less than half of
@@ -187,23 +190,53 @@ impl Blend<'_> {
                     let r0 = k * CHUNK;
                     let len = CHUNK.min(rows - r0);
                     self.transformed_rows(r0, &mut t[..len]);
-                    let mut acc = ClampSums::default();
-                    for (row, &v) in (r0..r0 + len).zip(t.iter()) {
-                        if unmeasured[row] == 0 {
-                            let bin = row % bins;
-                            let f = model.transform().inverse_form(bin).unclamped(v);
-                            acc.add(f, cosines[bin]);
-                        }
-                    }
-                    acc
+                    self.clamp_sums(r0, &t[..len], unmeasured, bins, cosines)
                 },
             )
             .collect();
+        model.verify()?;
+        Ok(self.figures(&parts))
+    }
+
+    /// [`Blend::table`] and [`Blend::plausibility`] from one pass over the
+    /// store: the same table, and the same figures to the bit (the clamp's
+    /// sums come in the same chunks, merged in the same order).
+    pub fn table_and_plausibility(&self) -> Result<(MerlTable, Plausibility)> {
+        let model = self.model();
+        let (store, bins) = (model.store(), model.dims().bins());
+        let (unmeasured, cosines) = (store.unmeasured(), model.cosine_products());
+        let (table, parts) =
+            self.table_with(|r0, t| self.clamp_sums(r0, t, unmeasured, bins, cosines))?;
+        Ok((table, self.figures(&parts)))
+    }
+
+    /// The clamp's sums over transformed values `t` of rows `r0 ..`.
+    fn clamp_sums(
+        &self,
+        r0: usize,
+        t: &[f64],
+        unmeasured: &[u8],
+        bins: usize,
+        cosines: &[f64],
+    ) -> ClampSums {
+        let transform = self.model().transform();
+        let mut acc = ClampSums::default();
+        for (row, &v) in (r0..r0 + t.len()).zip(t) {
+            if unmeasured[row] == 0 {
+                let bin = row % bins;
+                acc.add(transform.inverse_form(bin).unclamped(v), cosines[bin]);
+            }
+        }
+        acc
+    }
+
+    /// The figures from the chunks' sums, merged in order, and the largest
+    /// directional albedo.
+    fn figures(&self, parts: &[ClampSums]) -> Plausibility {
         let mut sums = ClampSums::default();
         parts.iter().for_each(|p| sums.merge(p));
         let (max_albedo, max_albedo_incidence) = self.largest_albedo();
-        model.verify()?;
-        Ok(sums.figures(max_albedo, max_albedo_incidence))
+        sums.figures(max_albedo, max_albedo_incidence)
     }
 
     /// The largest directional albedo of this material and its incidence

@@ -137,7 +137,7 @@ impl Memo {
 
 /// Rows a worker of [`Blend::table`] handles at once (fixed, so the work
 /// split does not depend on the thread count; results never do).
-const TABLE_CHUNK: usize = 4096;
+pub(crate) const TABLE_CHUNK: usize = 4096;
 
 impl Model {
     /// The blend at latent point `x` (`q` finite coordinates).
@@ -435,21 +435,34 @@ impl<'m> Blend<'m> {
     /// [`CoreError::FileChanged`](crate::CoreError::FileChanged) if the
     /// store changed on disk since the model was opened.
     pub fn table(&self) -> Result<MerlTable> {
+        Ok(self.table_with(|_, _| ())?.0)
+    }
+
+    /// [`Blend::table`], handing each chunk of transformed values (its
+    /// first row and the values, before the inverse transform and the
+    /// clamp) to `each` on the way: what it returns, in chunk order. For
+    /// figures of the same material that would otherwise take a pass over
+    /// the store of their own ([`Blend::table_and_plausibility`]).
+    pub(crate) fn table_with<T: Send>(
+        &self,
+        each: impl Fn(usize, &[f64]) -> T + Sync,
+    ) -> Result<(MerlTable, Vec<T>)> {
         self.model.store().verify_cheap()?;
         let dims = self.model.dims();
         let bins = dims.bins();
         let store = self.model.store();
         let unmeasured = store.unmeasured();
         let mut values = vec![0.0f64; dims.values()];
-        values
+        let seen: Vec<T> = values
             .par_chunks_mut(TABLE_CHUNK)
             .enumerate()
-            .for_each_init(
+            .map_init(
                 || vec![0.0f64; TABLE_CHUNK],
                 |t, (k, out)| {
                     let r0 = k * TABLE_CHUNK;
                     let t = &mut t[..out.len()];
                     self.transformed_rows(r0, t);
+                    let seen = each(r0, t);
                     // Split the chunk where it crosses from one channel to the next.
                     let mut j = 0;
                     while j < out.len() {
@@ -468,10 +481,13 @@ impl<'m> Blend<'m> {
                         }
                         j += len;
                     }
+                    seen
                 },
-            );
+            )
+            .collect();
         self.model.verify()?;
-        Ok(MerlTable::from_raw(dims, values).expect("length matches dims"))
+        let table = MerlTable::from_raw(dims, values).expect("length matches dims");
+        Ok((table, seen))
     }
 }
 
