@@ -84,7 +84,7 @@ fn parse_size(text: &str) -> u64 {
 }
 
 #[test]
-fn fit_and_queries_stay_under_512_mb_of_private_memory() {
+fn fit_and_queries_stay_under_512_mb_resident() {
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("merl");
     synth(&data, 100, "16,16,32", 7);
