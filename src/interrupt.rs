@@ -8,8 +8,14 @@
 //! clears the progress bars, removes the temporaries through
 //! [`brdf_atomic::remove_temporaries`] (which first waits for an output
 //! being put in place), prints one line and exits with 128 + the signal.
-//! A SIGKILL cannot be caught: the next run writing into the same directory
-//! removes what it left ([`brdf_atomic::sweep`]).
+//! A SIGKILL cannot be caught, and needs no cleaning up: files are written
+//! without a name until they take their place; what must have one (a
+//! report's directory) the next run writing beside it removes
+//! ([`brdf_atomic::sweep`]).
+//!
+//! No signal-handling crate: `sigwait` on a thread of its own needs none of
+//! the handler and self-pipe machinery such crates install, and leaves the
+//! process's handlers as they were.
 
 use crate::progress;
 
