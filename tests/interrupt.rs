@@ -10,11 +10,15 @@
 //! are valid), for the moments between. After a SIGKILL the directory is
 //! as before once the next run into it has finished.
 
+mod common;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::OnceLock;
 use std::time::Duration;
+
+use common::stopped_at;
 
 const BIN: &str = env!("CARGO_BIN_EXE_brdf-atlas");
 
@@ -106,41 +110,12 @@ fn interrupt(child: Child, delay: Duration, signal: libc::c_int) -> (Option<i32>
     )
 }
 
-/// Is process `pid` stopped (state `T` in `/proc/PID/stat`)?
-fn stopped(pid: u32) -> bool {
-    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
-    stat.rsplit_once(") ")
-        .is_some_and(|(_, rest)| rest.starts_with('T'))
-}
-
 /// Run `args` until it stops itself at `phase`, send `signal` while it is
 /// stopped, then let it go on: the exit code and stderr. Panics if the run
 /// ends before it reaches the phase (the signal would come too late).
 fn interrupt_at(args: &[&str], phase: &str, signal: libc::c_int) -> (Option<i32>, String) {
-    let child = Command::new(BIN)
-        .args(args)
-        .env("BRDF_ATLAS_TEST_STOP_IN", phase)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let child = stopped_at(args, phase, Stdio::piped());
     let pid = libc::pid_t::try_from(child.id()).unwrap();
-    let start = std::time::Instant::now();
-    while !stopped(child.id()) {
-        assert!(
-            start.elapsed() < Duration::from_secs(120),
-            "{args:?} never stopped in {phase}"
-        );
-        // A child that ended is a zombie until waited for: state Z, never T.
-        let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
-        assert!(
-            !stat
-                .rsplit_once(") ")
-                .is_some_and(|(_, r)| r.starts_with('Z')),
-            "{args:?} ended before it reached {phase}"
-        );
-        std::thread::sleep(Duration::from_millis(5));
-    }
     // SAFETY: our own child, stopped and not yet waited for.
     unsafe {
         libc::kill(pid, signal);

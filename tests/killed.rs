@@ -11,10 +11,13 @@
 //! it leaves its temporary directory (`.NAME.tmp-PID-N`), which the next
 //! run that writes beside it removes.
 
+mod common;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+
+use common::stopped_at;
 
 const BIN: &str = env!("CARGO_BIN_EXE_brdf-atlas");
 
@@ -51,34 +54,10 @@ fn listing(dir: &Path) -> BTreeMap<PathBuf, (u64, u64)> {
     all
 }
 
-/// Is process `pid` stopped (state `T` in `/proc/PID/stat`)?
-fn stopped(pid: u32) -> bool {
-    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
-    stat.rsplit_once(") ")
-        .is_some_and(|(_, rest)| rest.starts_with('T'))
-}
-
 /// Run `args` until it stops itself at `phase`, then SIGKILL it. Panics if
 /// it ends before reaching the phase: then nothing was killed mid-write.
 fn kill_at(args: &[&str], phase: &str) {
-    let mut child = Command::new(BIN)
-        .args(args)
-        .env("BRDF_ATLAS_TEST_STOP_IN", phase)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let start = Instant::now();
-    while !stopped(child.id()) {
-        if let Some(status) = child.try_wait().unwrap() {
-            panic!("{args:?} ended ({status}) before it reached {phase}");
-        }
-        assert!(
-            start.elapsed() < Duration::from_secs(120),
-            "{args:?}: no {phase}"
-        );
-        std::thread::sleep(Duration::from_millis(5));
-    }
+    let mut child = stopped_at(args, phase, Stdio::null());
     child.kill().unwrap();
     let status = child.wait().unwrap();
     use std::os::unix::process::ExitStatusExt;

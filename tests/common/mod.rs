@@ -186,3 +186,37 @@ pub fn assert_one_error_line(out: &std::process::Output, want: &[&str]) {
         assert!(stderr.contains(w), "expected {w:?} in {stderr}");
     }
 }
+
+/// The state letter of process `pid` (`T` stopped, `Z` ended but not yet
+/// waited for), from `/proc/PID/stat`.
+fn process_state(pid: u32) -> Option<char> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    stat.rsplit_once(") ")?.1.chars().next()
+}
+
+/// Start `brdf-atlas args` with `BRDF_ATLAS_TEST_STOP_IN=phase` and return
+/// it once it has stopped itself there (SIGSTOP), not yet waited for, with
+/// stdout discarded and stderr as given. Panics if it ends first (a signal
+/// sent then would come after the work) or takes over two minutes.
+pub fn stopped_at(args: &[&str], phase: &str, stderr: std::process::Stdio) -> std::process::Child {
+    let child = Command::new(env!("CARGO_BIN_EXE_brdf-atlas"))
+        .args(args)
+        .env("BRDF_ATLAS_TEST_STOP_IN", phase)
+        .stdout(std::process::Stdio::null())
+        .stderr(stderr)
+        .spawn()
+        .expect("the binary runs");
+    let start = std::time::Instant::now();
+    loop {
+        match process_state(child.id()) {
+            Some('T') => return child,
+            Some('Z') => panic!("{args:?} ended before it reached {phase}"),
+            _ => {}
+        }
+        assert!(
+            start.elapsed() < std::time::Duration::from_secs(120),
+            "{args:?} never stopped in {phase}"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+}
