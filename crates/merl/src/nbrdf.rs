@@ -25,13 +25,9 @@
 
 use std::path::{Path, PathBuf};
 
-use rayon::prelude::*;
-
-use brdf_atomic::{PendingFile, commit_all};
-
 use crate::angles::Dims;
 use crate::error::{MerlError, Result};
-use crate::table::MerlTable;
+use crate::table::{MerlTable, write_named};
 
 /// The materials' names, one a line, in the order of [`WEIGHTS`].
 const NAMES: &str = include_str!("../data/nbrdf/materials.txt");
@@ -145,14 +141,7 @@ pub fn write_dir(dir: &Path, names: &[&str], dims: Dims) -> Result<Vec<PathBuf>>
             })
         })
         .collect::<Result<Vec<Network>>>()?;
-    std::fs::create_dir_all(dir).map_err(|e| MerlError::io(dir, e))?;
-    let staged = networks
-        .par_iter()
-        .map(|m| m.table(dims).stage(dir.join(format!("{}.binary", m.name))))
-        .collect::<Result<Vec<PendingFile>>>()?;
-    let paths = staged.iter().map(|f| f.target().to_path_buf()).collect();
-    commit_all(staged).map_err(|(path, e)| MerlError::io(path, e))?;
-    Ok(paths)
+    write_named(dir, &networks, |m| m.name, |m| m.table(dims))
 }
 
 #[cfg(test)]

@@ -12,9 +12,8 @@ use std::path::{Path, PathBuf};
 use rayon::prelude::*;
 
 use crate::angles::{Dims, HalfDiff, Vec3};
-use crate::error::{MerlError, Result};
-use crate::table::{INVALID, MerlTable, raw_from_physical};
-use brdf_atomic::{PendingFile, commit_all};
+use crate::error::Result;
+use crate::table::{INVALID, MerlTable, raw_from_physical, write_named};
 
 /// An analytic isotropic BRDF: Lambert + GGX microfacet with Fresnel.
 #[derive(Debug, Clone, PartialEq)]
@@ -237,18 +236,12 @@ pub fn database(count: usize, seed: u64) -> Vec<SynthMaterial> {
 /// # std::fs::remove_dir_all(&dir).unwrap();
 /// ```
 pub fn write_dir(dir: &Path, count: usize, dims: Dims, seed: u64) -> Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir).map_err(|e| MerlError::io(dir, e))?;
-    let staged = database(count, seed)
-        .par_iter()
-        .map(|m| {
-            m.brdf
-                .table(dims)
-                .stage(dir.join(format!("{}.binary", m.name)))
-        })
-        .collect::<Result<Vec<PendingFile>>>()?;
-    let paths = staged.iter().map(|f| f.target().to_path_buf()).collect();
-    commit_all(staged).map_err(|(path, e)| MerlError::io(path, e))?;
-    Ok(paths)
+    write_named(
+        dir,
+        &database(count, seed),
+        |m| &m.name,
+        |m| m.brdf.table(dims),
+    )
 }
 
 #[cfg(test)]

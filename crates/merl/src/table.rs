@@ -18,7 +18,8 @@ pub use crate::values::{
     raw_from_physical,
 };
 use crate::values::{first_out_of_range, scan_values};
-use brdf_atomic::{PendingFile, stage};
+use brdf_atomic::{PendingFile, commit_all, stage};
+use rayon::prelude::*;
 
 /// Bytes of the header.
 pub const HEADER_BYTES: usize = 12;
@@ -399,6 +400,26 @@ impl MerlTable {
             }
         })
     }
+}
+
+/// Write `NAME.binary` into `dir` (created if missing) for each of
+/// `items`, tabulated in parallel, all or none: every file is staged
+/// first and all go in together ([`commit_all`]). The paths, in `items`'
+/// order.
+pub(crate) fn write_named<M: Sync>(
+    dir: &Path,
+    items: &[M],
+    name: impl Fn(&M) -> &str + Sync,
+    table: impl Fn(&M) -> MerlTable + Sync,
+) -> Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir).map_err(|e| MerlError::io(dir, e))?;
+    let staged = items
+        .par_iter()
+        .map(|m| table(m).stage(dir.join(format!("{}.binary", name(m)))))
+        .collect::<Result<Vec<PendingFile>>>()?;
+    let paths = staged.iter().map(|f| f.target().to_path_buf()).collect();
+    commit_all(staged).map_err(|(path, e)| MerlError::io(path, e))?;
+    Ok(paths)
 }
 
 #[cfg(test)]
