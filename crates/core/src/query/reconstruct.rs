@@ -279,64 +279,58 @@ impl<'m> Blend<'m> {
         }
     }
 
-    /// [`Blend::transformed`] for rows `r0 .. r0 + out.len()`.
+    /// [`Blend::transformed`] for rows `r0 .. r0 + out.len()`. Under the
+    /// floor a run of rows at a time, on the stack: the GP's and the convex
+    /// blend (from one read of each row, [`dot::rows2`], unless the GP's
+    /// weights change along the run with the theta_h bands, when its blend
+    /// comes first), the caps, then the floor.
     pub fn transformed_rows(&self, r0: usize, out: &mut [f64]) {
-        if let (Some(v), None) = (&self.floor, &self.bands) {
-            return self.floor_rows(v, r0, out);
+        let Some(v) = &self.floor else {
+            return self.blended_rows(r0, out);
+        };
+        let banded = self.bands.is_some();
+        if banded {
+            self.blended_rows(r0, out);
         }
-        self.blended_rows(r0, out);
-        if let Some(v) = &self.floor {
-            let store = self.model.store();
-            let n = store.n();
-            // The convex blend and the caps a run at a time, on the stack.
-            let (mut convex, mut top) = ([0.0f64; 256], [0.0f64; 256]);
-            for (k, out) in out.chunks_mut(convex.len()).enumerate() {
-                let r = r0 + k * convex.len();
-                let (mean, c) = (&store.mean()[r..], &mut convex[..out.len()]);
-                match store.z() {
-                    Rows::F32(z) => dot::rows(v, &z[r * n..], mean, c),
-                    Rows::F64(z) => dot::rows(v, &z[r * n..], mean, c),
-                }
-                let top = &mut top[..out.len()];
-                let rows = r * n..(r + out.len()) * n;
-                match store.z() {
-                    Rows::F32(z) => caps(&z[rows], n, mean, top),
-                    Rows::F64(z) => caps(&z[rows], n, mean, top),
-                }
-                floor_values(out, c, top);
-            }
-        }
-    }
-
-    /// The floor rule's rows `r0 .. r0 + out.len()` with one set of GP
-    /// weights (no bands): the GP's and the convex blend from one read of
-    /// each row ([`dot::rows2`]), then the caps and the floor, a run at a
-    /// time on the stack. The same bits as the GP's pass and then the
-    /// floor's.
-    fn floor_rows(&self, v: &[f64], r0: usize, out: &mut [f64]) {
         let store = self.model.store();
         let n = store.n();
         let (mut convex, mut top) = ([0.0f64; 256], [0.0f64; 256]);
         for (k, out) in out.chunks_mut(convex.len()).enumerate() {
             let r = r0 + k * convex.len();
             let (mean, c, top) = (
-                &store.mean()[r..],
+                &store.mean()[r..r + out.len()],
                 &mut convex[..out.len()],
                 &mut top[..out.len()],
             );
             let rows = r * n..(r + out.len()) * n;
             match store.z() {
-                Rows::F32(z) => {
-                    dot::rows2(&self.weights, v, &z[rows.clone()], mean, out, c);
-                    caps(&z[rows], n, mean, top);
-                }
-                Rows::F64(z) => {
-                    dot::rows2(&self.weights, v, &z[rows.clone()], mean, out, c);
-                    caps(&z[rows], n, mean, top);
-                }
+                Rows::F32(z) => self.floor_inputs(v, banded, &z[rows], mean, out, c, top),
+                Rows::F64(z) => self.floor_inputs(v, banded, &z[rows], mean, out, c, top),
             }
             floor_values(out, c, top);
         }
+    }
+
+    /// The soft floor's inputs for a run of store rows `z`: the convex
+    /// blend `c` (convex weights `v`), the caps `top`, and the GP's blend
+    /// into `gp` unless it is there already (`banded`).
+    #[allow(clippy::too_many_arguments)]
+    fn floor_inputs<T: dot::Element + PartialOrd>(
+        &self,
+        v: &[f64],
+        banded: bool,
+        z: &[T],
+        mean: &[f64],
+        gp: &mut [f64],
+        c: &mut [f64],
+        top: &mut [f64],
+    ) {
+        if banded {
+            dot::rows(v, z, mean, c);
+        } else {
+            dot::rows2(&self.weights, v, z, mean, gp, c);
+        }
+        caps(z, v.len(), mean, top);
     }
 
     /// `mean + w . z` of rows `r0 .. r0 + out.len()`, with each row's weights.
