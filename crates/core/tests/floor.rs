@@ -8,6 +8,8 @@ use brdf_atlas_core::TransformKind;
 use brdf_atlas_core::floor::{FLOOR_SHARE, FLOOR_SOFTNESS};
 use brdf_atlas_core::loo::{self, CONVEX_LENGTH_RATIO};
 use brdf_atlas_core::{BlendRule, Model, NoProgress};
+use brdf_merl::directional::INCIDENCE_DEGREES;
+use brdf_merl::{DirectionalRule, MerlTable};
 use common::{DIMS, POINTS, fit};
 
 /// The rule written out: `c (s + d ln(1 + e^((g / c - s) / d)))`.
@@ -53,6 +55,46 @@ fn inverse(kind: TransformKind, bin: usize, v: f64) -> f64 {
     }
 }
 
+/// The cap's reach per channel at convex weights `v`, recomputed from the
+/// stored rows as `query::floor::reach_cap` and the store's energy bound
+/// define it: the largest `r` in [0, 1] for which `(1 - r) sum_i v_i A_i +
+/// r A_top` stays under `max(1, max_i A_i)` (less 1e-9 of it) at every
+/// incidence, `A_i` each material's directional albedo and `A_top` that of
+/// the table of brightest values.
+fn dense_reach(m: &Model, transform: TransformKind, v: &[f64]) -> [f64; 3] {
+    let store = m.store();
+    let (n, bins) = (store.n(), DIMS.bins());
+    let rule = DirectionalRule::new(DIMS);
+    let mut z = vec![0.0; n];
+    let mut reach = [1.0f64; 3];
+    for k in 0..INCIDENCE_DEGREES.len() {
+        let entries = rule.start_of(k)..rule.start_of(k + 1);
+        for (c, r) in reach.iter_mut().enumerate() {
+            let (mut each, mut top) = (vec![0.0; n], 0.0);
+            for e in entries.clone() {
+                let (bin, w) = (rule.bins()[e] as usize, rule.weights()[e]);
+                let row = c * bins + bin;
+                if store.unmeasured()[row] != 0 {
+                    continue;
+                }
+                store.copy_rows(row, &mut z);
+                let mean = store.mean()[row];
+                let value = |t: f64| inverse(transform, bin, t).max(0.0);
+                for (a, &zi) in each.iter_mut().zip(&z) {
+                    *a += w * value(mean + zi);
+                }
+                top += w * value(mean + z.iter().copied().fold(f64::NEG_INFINITY, f64::max));
+            }
+            let bound = each.iter().copied().fold(1.0, f64::max) * (1.0 - 1e-9);
+            let blend: f64 = v.iter().zip(&each).map(|(v, a)| v * a).sum();
+            if top > bound && top > blend {
+                *r = r.min(((bound - blend) / (top - blend)).clamp(0.0, 1.0));
+            }
+        }
+    }
+    reach
+}
+
 #[test]
 fn values_equal_a_dense_recomputation_and_are_never_clamped() {
     let tmp = tempfile::tempdir().unwrap();
@@ -61,7 +103,7 @@ fn values_equal_a_dense_recomputation_and_are_never_clamped() {
         let store = m.store();
         let (n, bins) = (store.n(), DIMS.bins());
         let mut z = vec![0.0; n];
-        let (mut gp_clamped, mut lifted, mut kept, mut capped) = (0, 0, 0, 0);
+        let (mut gp_clamped, mut lifted, mut kept, mut capped, mut reached) = (0, 0, 0, 0, 0);
         for x in POINTS {
             let gp = m.at(&x).unwrap();
             let b = m.at_with(&x, BlendRule::Floor).unwrap();
@@ -72,6 +114,15 @@ fn values_equal_a_dense_recomputation_and_are_never_clamped() {
             for (a, w) in got_v.iter().zip(&v) {
                 assert!((a - w).abs() <= 1e-12, "{x:?}: convex {got_v:?} vs {v:?}");
             }
+            let reach = dense_reach(&m, transform, &v);
+            for (got, want) in b.reach().iter().zip(&reach) {
+                assert!(
+                    (got - want).abs() <= 1e-9,
+                    "{x:?}: reach {:?} vs {reach:?}",
+                    b.reach()
+                );
+            }
+            reached += usize::from(reach.iter().any(|&r| r < 1.0));
             let table = b.table().unwrap();
             for row in 0..store.rows() {
                 if store.unmeasured()[row] != 0 {
@@ -82,13 +133,15 @@ fn values_equal_a_dense_recomputation_and_are_never_clamped() {
                     store.mean()[row] + w.iter().zip(&z).map(|(a, b)| a * b).sum::<f64>()
                 };
                 let (g, c) = (blend(gp.gp_weights()), blend(&v));
-                // The floor, capped at the brightest material's value.
-                let top = store.mean()[row] + z.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-                let lifted_value = floor(g, c);
-                let want = lifted_value.min(top);
-                assert!(top >= c - 1e-12 * c.abs() && want >= FLOOR_SHARE * c.min(top));
-                capped += usize::from(lifted_value > top);
+                // The floor, capped on the way from the convex blend to the
+                // brightest material's value.
                 let (ch, bin) = (row / bins, row % bins);
+                let top = store.mean()[row] + z.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                let cap = c + reach[ch] * (top - c);
+                let lifted_value = floor(g, c);
+                let want = lifted_value.min(cap);
+                assert!(top >= c - 1e-12 * c.abs() && want >= FLOOR_SHARE * c.min(top));
+                capped += usize::from(lifted_value > cap);
                 let tol = 1e-9 * want.abs().max(1e-9);
                 assert!(
                     (b.transformed(row) - want).abs() <= tol,
@@ -108,9 +161,9 @@ fn values_equal_a_dense_recomputation_and_are_never_clamped() {
                     "{from_table} vs {f}"
                 );
                 gp_clamped += usize::from(g < 0.0);
-                if lifted_value > top {
-                    // The GP above every material: capped there.
-                    assert_eq!(want, top);
+                if lifted_value > cap {
+                    // The GP above the cap: capped there.
+                    assert_eq!(want, cap);
                 } else if c <= 0.0 {
                     // No material reflects anything here: the GP's value, clamped.
                     assert_eq!(want, g.max(0.0));
@@ -146,6 +199,9 @@ fn values_equal_a_dense_recomputation_and_are_never_clamped() {
         // Some of these points lie beyond the materials, where the GP
         // overshoots the brightest of them.
         assert!(capped > 0, "{transform:?}: nothing capped");
+        // And some lie near materials bright at grazing incidence, where
+        // the cap stops short of the brightest material's value.
+        assert!(reached > 0, "{transform:?}: every reach is 1");
     }
 }
 
@@ -168,6 +224,13 @@ fn held_out_errors_equal_a_dense_recomputation() {
     let mut z = vec![0.0; n];
     let mut sums = vec![0.0; n];
     let mut scored = 0;
+    // Each material's reach, from the convex weights it is predicted with.
+    let reach: Vec<[f64; 3]> = (0..n)
+        .map(|i| {
+            let v: Vec<f64> = (0..n).map(|j| cv[(i, j)]).collect();
+            dense_reach(&m, TransformKind::Log, &v)
+        })
+        .collect();
     for row in 0..store.rows() {
         let bin = row % bins;
         let (ci, co) = DIMS.angles_of(bin).cosines();
@@ -184,7 +247,8 @@ fn held_out_errors_equal_a_dense_recomputation() {
                 .filter(|&j| j != i)
                 .map(|j| z[j])
                 .fold(f64::NEG_INFINITY, f64::max);
-            let y = floor(predict(&gp), predict(&cv)).min(mean + top);
+            let (g, c) = (predict(&gp), predict(&cv));
+            let y = floor(g, c).min(c + reach[i][row / bins] * (mean + top - c));
             // ln(1 + f c) of the log transform's value is the value itself.
             let d = y.max(0.0) - (mean + z[i]).max(0.0);
             *s += d * d;
@@ -288,5 +352,61 @@ fn exact_albedos_and_maps_of_the_floor_are_the_floor_materials() {
             )
             .is_err()
         );
+    }
+}
+
+#[test]
+fn the_default_material_reflects_no_more_than_one_nor_than_the_brightest() {
+    let tmp = tempfile::tempdir().unwrap();
+    let rule = DirectionalRule::new(DIMS);
+    let albedos = |t: &MerlTable| rule.integrate(|b| t.rgb_or_zero(b));
+    for transform in TransformKind::ALL {
+        let m = Model::open(fit(tmp.path(), 12, transform)).unwrap();
+        // The bound from the material files themselves: at each incidence
+        // and channel, 1 or the brightest material's albedo if it is more.
+        let mut files: Vec<_> = std::fs::read_dir(tmp.path().join("data-12"))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .collect();
+        files.sort();
+        let tables: Vec<MerlTable> = files.iter().map(|p| MerlTable::read(p).unwrap()).collect();
+        let mut bound = vec![[1.0f64; 3]; INCIDENCE_DEGREES.len()];
+        for t in &tables {
+            for (b, a) in bound.iter_mut().zip(albedos(t)) {
+                (0..3).for_each(|c| b[c] = b[c].max(a[c]));
+            }
+        }
+        // The table of every bin's brightest value goes over it: a cap at
+        // the brightest material alone would not hold a blend under it.
+        let brightest = MerlTable::from_fn(DIMS, |bin| {
+            let each = tables.iter().map(|t| t.rgb_or_zero(bin));
+            Some(each.fold([0.0; 3], |a, v| [0, 1, 2].map(|c| a[c].max(v[c]))))
+        });
+        let over = |a: &[[f64; 3]]| {
+            a.iter()
+                .zip(&bound)
+                .any(|(a, b)| (0..3).any(|c| a[c] > b[c] * (1.0 + 1e-6)))
+        };
+        assert!(
+            over(&albedos(&brightest)),
+            "{transform:?}: nothing to bound"
+        );
+        // Every point of the view and beyond it, and every material's own.
+        let mut points: Vec<[f64; 2]> = (0..81)
+            .map(|k| [-1.6 + 0.4 * (k / 9) as f64, -1.6 + 0.4 * (k % 9) as f64])
+            .collect();
+        let lat = m.latent();
+        points.extend((0..lat.nrows()).map(|i| [lat[(i, 0)], lat[(i, 1)]]));
+        let mut gp_over = 0;
+        for x in &points {
+            let table = m.at_with(x, BlendRule::Floor).unwrap().table().unwrap();
+            let a = albedos(&table);
+            assert!(!over(&a), "{transform:?} {x:?}: {a:?} over {bound:?}");
+            let gp = m.at(x).unwrap().table().unwrap();
+            gp_over += usize::from(over(&albedos(&gp)));
+        }
+        // The GP's own blend goes over at some of these points: the
+        // default rule's cap is what holds its material under the bound.
+        assert!(gp_over > 0, "{transform:?}: the GP never goes over");
     }
 }

@@ -228,6 +228,29 @@ pub fn evaluate_some(
     let dims = store.dims();
     let bins = dims.bins();
     let rows = store.rows();
+    // Each floor mix's reach per channel and material, from the convex
+    // weights its material is predicted with (the material itself on its
+    // own point).
+    let reach: Vec<[Vec<f64>; 3]> = mixes
+        .iter()
+        .map(|mix| {
+            let convex: Vec<Vec<f64>> = match mix.how {
+                Mixing::Steps(_) => return Default::default(),
+                Mixing::FloorOnSelf => (0..n)
+                    .map(|i| (0..n).map(|j| f64::from(u8::from(i == j))).collect())
+                    .collect(),
+                Mixing::Floor => {
+                    let p = &predictors[mix.towards];
+                    (0..n)
+                        .map(|i| (0..n).map(|j| p[(i, j)]).collect())
+                        .collect()
+                }
+            };
+            let bound = store.energy_bound();
+            let r: Vec<[f64; 3]> = convex.iter().map(|v| bound.reach(v)).collect();
+            [0, 1, 2].map(|c| r.iter().map(|r| r[c]).collect())
+        })
+        .collect();
     let kept = every.rows(dims, rows);
     let passed = kept.as_ref().map_or(rows, Vec::len);
     let (cos, grazing) = cosines(dims);
@@ -344,13 +367,14 @@ pub fn evaluate_some(
                                 // multiply-adds, a library call elsewhere.
                                 out.copy_from_slice(from);
                                 let zr = &z[k * n..(k + 1) * n];
+                                let reach = &reach[m][ids.get(k) / bins];
                                 if matches!(mix.how, Mixing::FloorOnSelf) {
-                                    floor_points(out, towards, mean, top_of(zr));
+                                    floor_points(out, towards, mean, top_of(zr), reach);
                                 } else {
                                     // Held out: each material's cap is the
                                     // brightest of the others'.
                                     others_top(zr, tops);
-                                    floor_points_each(out, towards, mean, tops);
+                                    floor_points_each(out, towards, mean, tops, reach);
                                 }
                             }
                         }

@@ -137,7 +137,11 @@ impl Model {
             return Ok(Vec::new());
         }
         let n = self.latent().nrows();
-        let (a, av) = self.pass_weights(points, floor)?;
+        let PassWeights {
+            gp: a,
+            convex: av,
+            reach,
+        } = self.pass_weights(points, floor)?;
         let store = self.store();
         let mean = store.mean();
         // Products in f64 through the library's own kernel (faer's would
@@ -169,7 +173,7 @@ impl Model {
                             let (t, v) =
                                 (&mut s.t64[k * m..(k + 1) * m], &s.v64[k * m..(k + 1) * m]);
                             let top = top_of(&s.z64[k * n..(k + 1) * n]);
-                            floor_points(t, v, mu, top);
+                            floor_points(t, v, mu, top, &reach[c]);
                         }
                         let t = &s.t64[k * m..(k + 1) * m];
                         if rule.exponential {
@@ -199,16 +203,8 @@ impl Model {
 }
 
 impl Model {
-    /// The weights of a pass over the store at `points`: the GP's `K^-1
-    /// k(x)` of every point laid out `n x m` row-major (material `t`, point
-    /// `j` at `t m + j`), so that a block of store rows `Z_block` (`len x
-    /// n`) gives the points' values as one product; and, if `floor`, the
-    /// convex weights laid out alike (else empty).
-    pub(crate) fn pass_weights(
-        &self,
-        points: &[[f64; 2]],
-        floor: bool,
-    ) -> Result<(Vec<f64>, Vec<f64>)> {
+    /// The weights of a pass over the store at `points` ([`PassWeights`]).
+    pub(crate) fn pass_weights(&self, points: &[[f64; 2]], floor: bool) -> Result<PassWeights> {
         for p in points {
             self.kernel_and_weights_at(p)?;
         }
@@ -222,17 +218,36 @@ impl Model {
             .flat_map(|t| (0..m).map(move |j| (t, j)))
             .map(|(t, j)| w[(t, j)])
             .collect();
-        let av: Vec<f64> = if floor {
+        let mut out = PassWeights {
+            gp: a,
+            convex: Vec::new(),
+            reach: Default::default(),
+        };
+        if floor {
             let v = self.convex_weights_at(points);
-            (0..n)
+            out.convex = (0..n)
                 .flat_map(|t| (0..m).map(move |j| (t, j)))
                 .map(|(t, j)| v[j][t])
-                .collect()
-        } else {
-            Vec::new()
-        };
-        Ok((a, av))
+                .collect();
+            let bound = self.store().energy_bound();
+            let reach: Vec<[f64; 3]> = v.iter().map(|v| bound.reach(v)).collect();
+            out.reach = [0, 1, 2].map(|c| reach.iter().map(|r| r[c]).collect());
+        }
+        Ok(out)
     }
+}
+
+/// The weights of a pass over the store at `m` points.
+pub(crate) struct PassWeights {
+    /// The GP's `K^-1 k(x)` of every point laid out `n x m` row-major
+    /// (material `t`, point `j` at `t m + j`), so that a block of store rows
+    /// `Z_block` (`len x n`) gives the points' values as one product.
+    pub(crate) gp: Vec<f64>,
+    /// Under the floor, the convex weights laid out alike (else empty).
+    pub(crate) convex: Vec<f64>,
+    /// Under the floor, each channel's reach at every point
+    /// ([`crate::query::floor::reach_cap`]; else empty).
+    pub(crate) reach: [Vec<f64>; 3],
 }
 
 /// A worker's buffers for [`Model::exact_albedos`]: a block of rows and

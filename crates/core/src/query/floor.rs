@@ -59,16 +59,25 @@ pub fn soft_floor_with(g: f64, c: f64, s: f64, d: f64) -> f64 {
 }
 
 /// The rule's value of a row: [`soft_floor`] of the GP value `g` and the
-/// convex value `c`, capped at `top`, the brightest material's value at
-/// the row (transformed space; every transform is increasing, so no bin of
-/// a blend reflects more than the brightest material does there). The cap
-/// changes only values the GP drives above every material, as it does
-/// where it extrapolates beyond the materials' box; it is at or above `c`,
-/// so the floor stays under it, and a material at its own point, which is
-/// at most the brightest, is left as it is.
+/// convex value `c`, capped at `cap` (transformed space; see [`reach_cap`]).
+/// The cap is at or above `c`, so the floor stays under it, and a material
+/// at its own point, where `c` is that material, is left as it is.
 #[inline(always)]
-pub fn floor_capped(g: f64, c: f64, top: f64) -> f64 {
-    soft_floor(g, c).min(top)
+pub fn floor_capped(g: f64, c: f64, cap: f64) -> f64 {
+    soft_floor(g, c).min(cap)
+}
+
+/// The cap of a row whose convex value is `c` and brightest material's
+/// value `top` (transformed space; every transform is increasing, so `top`
+/// is the most any material reflects there), at reach `r` in `[0, 1]`:
+/// `c + r (top - c)`. At reach 1 it is the brightest material's value, which
+/// only values the GP drives above every material meet (it extrapolates so
+/// beyond the materials' box); a smaller reach, near materials bright at
+/// grazing incidence, keeps the material's directional albedo under 1
+/// ([`crate::data::store::EnergyBound`] says why and how far).
+#[inline(always)]
+pub fn reach_cap(c: f64, top: f64, r: f64) -> f64 {
+    c + r * (top - c)
 }
 
 /// The largest of a row's centred values (f32 or f64, as the store holds
@@ -136,7 +145,8 @@ fn caps_portable<T: Copy + PartialOrd + Into<f64>>(
 
 /// Every value of `g` on its soft floor and under its cap, in place, all
 /// three in transformed space as they are (not centred): row `k` has GP
-/// value `g[k]`, convex value `c[k]` and cap `top[k]` ([`floor_capped`];
+/// value `g[k]`, convex value `c[k]` and cap `top[k]` ([`floor_capped`],
+/// the cap already [`reach_cap`]'s;
 /// a reconstruction's rows). The same bits as [`floor_capped`] value by
 /// value, in code compiled for FMA where the CPU has it (the crate's `exp`
 /// and `log1p` use fused multiply-adds, which are calls to a software
@@ -165,75 +175,75 @@ fn floor_values_portable(g: &mut [f64], c: &[f64], top: &[f64]) {
 
 /// Every value of `t` on its soft floor and under its cap, in place: row
 /// `k` has mean `mean[k]`, GP value `mean[k] + t[k]`, convex value
-/// `mean[k] + c[k]` and cap `mean[k] + top[k]` (the map's per-pixel rule:
-/// one row a quadrature bin).
-pub(crate) fn floor_rows(t: &mut [f64], c: &[f64], mean: &[f64], top: &[f64]) {
+/// `mean[k] + c[k]`, brightest value `mean[k] + top[k]` and reach `r[k]`
+/// ([`reach_cap`]; the map's per-pixel rule: one row a quadrature bin).
+pub(crate) fn floor_rows(t: &mut [f64], c: &[f64], mean: &[f64], top: &[f64], r: &[f64]) {
     #[cfg(target_arch = "x86_64")]
     if crate::simd::has_avx2_fma() {
         // SAFETY: the CPU has AVX2 and FMA (checked just above).
-        return unsafe { floor_rows_fma(t, c, mean, top) };
+        return unsafe { floor_rows_fma(t, c, mean, top, r) };
     }
-    floor_rows_portable(t, c, mean, top);
+    floor_rows_portable(t, c, mean, top, r);
 }
 
-/// [`floor_rows`] with one mean and cap for every value (the exact pass:
-/// one store row at many points).
-pub(crate) fn floor_points(t: &mut [f64], c: &[f64], mean: f64, top: f64) {
+/// [`floor_rows`] with one mean and brightest value for every value, and a
+/// reach for each (the exact pass: one store row at many points).
+pub(crate) fn floor_points(t: &mut [f64], c: &[f64], mean: f64, top: f64, r: &[f64]) {
     #[cfg(target_arch = "x86_64")]
     if crate::simd::has_avx2_fma() {
         // SAFETY: the CPU has AVX2 and FMA (checked just above).
-        return unsafe { floor_points_fma(t, c, mean, top) };
+        return unsafe { floor_points_fma(t, c, mean, top, r) };
     }
-    floor_points_portable(t, c, mean, top);
+    floor_points_portable(t, c, mean, top, r);
 }
 
-/// [`floor_points`] with a cap for each value (leave-one-out: each
-/// material's cap is the brightest of the others').
-pub(crate) fn floor_points_each(t: &mut [f64], c: &[f64], mean: f64, top: &[f64]) {
+/// [`floor_points`] with a brightest value for each value (leave-one-out:
+/// each material's is the brightest of the others').
+pub(crate) fn floor_points_each(t: &mut [f64], c: &[f64], mean: f64, top: &[f64], r: &[f64]) {
     #[cfg(target_arch = "x86_64")]
     if crate::simd::has_avx2_fma() {
         // SAFETY: the CPU has AVX2 and FMA (checked just above).
-        return unsafe { floor_points_each_fma(t, c, mean, top) };
+        return unsafe { floor_points_each_fma(t, c, mean, top, r) };
     }
-    floor_points_each_portable(t, c, mean, top);
+    floor_points_each_portable(t, c, mean, top, r);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn floor_points_each_fma(t: &mut [f64], c: &[f64], mean: f64, top: &[f64]) {
-    floor_points_each_portable(t, c, mean, top);
+fn floor_points_each_fma(t: &mut [f64], c: &[f64], mean: f64, top: &[f64], r: &[f64]) {
+    floor_points_each_portable(t, c, mean, top, r);
 }
 
 #[inline(always)]
-fn floor_points_each_portable(t: &mut [f64], c: &[f64], m: f64, top: &[f64]) {
-    for ((t, &c), &u) in t.iter_mut().zip(c).zip(top) {
-        *t = floor_capped(m + *t, m + c, m + u) - m;
+fn floor_points_each_portable(t: &mut [f64], c: &[f64], m: f64, top: &[f64], r: &[f64]) {
+    for (((t, &c), &u), &r) in t.iter_mut().zip(c).zip(top).zip(r) {
+        *t = floor_capped(m + *t, m + c, m + reach_cap(c, u, r)) - m;
     }
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn floor_rows_fma(t: &mut [f64], c: &[f64], mean: &[f64], top: &[f64]) {
-    floor_rows_portable(t, c, mean, top);
+fn floor_rows_fma(t: &mut [f64], c: &[f64], mean: &[f64], top: &[f64], r: &[f64]) {
+    floor_rows_portable(t, c, mean, top, r);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn floor_points_fma(t: &mut [f64], c: &[f64], mean: f64, top: f64) {
-    floor_points_portable(t, c, mean, top);
+fn floor_points_fma(t: &mut [f64], c: &[f64], mean: f64, top: f64, r: &[f64]) {
+    floor_points_portable(t, c, mean, top, r);
 }
 
 #[inline(always)]
-fn floor_rows_portable(t: &mut [f64], c: &[f64], mean: &[f64], top: &[f64]) {
-    for (((t, &c), &m), &u) in t.iter_mut().zip(c).zip(mean).zip(top) {
-        *t = floor_capped(m + *t, m + c, m + u) - m;
+fn floor_rows_portable(t: &mut [f64], c: &[f64], mean: &[f64], top: &[f64], r: &[f64]) {
+    for ((((t, &c), &m), &u), &r) in t.iter_mut().zip(c).zip(mean).zip(top).zip(r) {
+        *t = floor_capped(m + *t, m + c, m + reach_cap(c, u, r)) - m;
     }
 }
 
 #[inline(always)]
-fn floor_points_portable(t: &mut [f64], c: &[f64], m: f64, top: f64) {
-    for (t, &c) in t.iter_mut().zip(c) {
-        *t = floor_capped(m + *t, m + c, m + top) - m;
+fn floor_points_portable(t: &mut [f64], c: &[f64], m: f64, top: f64, r: &[f64]) {
+    for ((t, &c), &r) in t.iter_mut().zip(c).zip(r) {
+        *t = floor_capped(m + *t, m + c, m + reach_cap(c, top, r)) - m;
     }
 }
 

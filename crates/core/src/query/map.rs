@@ -346,11 +346,22 @@ impl Model {
                                     [view.pixel_to_latent(px as f64, 0.0, width, height)[0], y]
                                 })
                                 .collect();
-                            let vx: Vec<f64> = self.convex_weights_at(&xs).concat();
+                            let convex = self.convex_weights_at(&xs);
+                            let vx: Vec<f64> = convex.concat();
                             let mut cbuf = vec![0.0f64; r * width];
                             matmul(&mut cbuf, cv, &vx, n);
-                            for (col, cvals) in vbuf.chunks_exact_mut(r).zip(cbuf.chunks_exact(r)) {
-                                floor_rows(col, cvals, mean, top);
+                            // Each row's reach: its channel's at the pixel.
+                            let bound = self.store().energy_bound();
+                            let mut reach = vec![0.0f64; r];
+                            let columns = vbuf.chunks_exact_mut(r).zip(cbuf.chunks_exact(r));
+                            for ((col, cvals), v) in columns.zip(&convex) {
+                                let at = bound.reach(v);
+                                let mut start = 0;
+                                for (ch, &end) in ends.iter().enumerate() {
+                                    reach[start..end].fill(at[ch]);
+                                    start = end;
+                                }
+                                floor_rows(col, cvals, mean, top, &reach);
                             }
                         }
                         let mut terms = vec![0.0f64; r];

@@ -31,7 +31,7 @@ use rayon::prelude::*;
 use crate::data::store::Rows;
 use crate::error::Result;
 use crate::model::Model;
-use crate::query::floor::{caps, floor_capped, floor_values};
+use crate::query::floor::{caps, floor_capped, floor_values, reach_cap};
 use crate::simd::dot;
 
 /// One latent point of a model, ready to answer queries.
@@ -49,6 +49,9 @@ pub struct Blend<'m> {
     /// The convex weights `v`, where [`crate::query::BlendRule::Floor`]
     /// lifts every value onto its soft floor ([`crate::query::floor`]).
     floor: Option<Box<[f64]>>,
+    /// Under the floor, how far each channel's cap reaches from the convex
+    /// blend towards the brightest material ([`crate::query::floor::reach_cap`]).
+    reach: [f64; 3],
     /// `value(channel, bin)` of every row asked so far (see [`Memo`]).
     memo: OnceLock<Box<[AtomicU64]>>,
 }
@@ -154,6 +157,7 @@ impl Model {
             weights,
             bands: None,
             floor: None,
+            reach: [1.0; 3],
             memo: OnceLock::new(),
         })
     }
@@ -168,6 +172,7 @@ impl Model {
             weights: weights.to_vec(),
             bands: None,
             floor: None,
+            reach: [1.0; 3],
             memo: OnceLock::new(),
         }
     }
@@ -241,6 +246,9 @@ impl<'m> Blend<'m> {
 
     /// The same point and weights under a rule's `bands` or `floor`.
     fn moved(&self, bands: Option<Box<Bands>>, floor: Option<Box<[f64]>>) -> Blend<'m> {
+        let reach = floor
+            .as_deref()
+            .map_or([1.0; 3], |v| self.model.store().energy_bound().reach(v));
         Blend {
             model: self.model,
             x: self.x.clone(),
@@ -249,6 +257,7 @@ impl<'m> Blend<'m> {
             weights: self.weights.clone(),
             bands,
             floor,
+            reach,
             memo: OnceLock::new(),
         }
     }
@@ -257,6 +266,14 @@ impl<'m> Blend<'m> {
     /// weights `v` whose blend sets each value's floor.
     pub fn floor(&self) -> Option<&[f64]> {
         self.floor.as_deref()
+    }
+
+    /// Under [`crate::query::BlendRule::Floor`], how far each channel's cap
+    /// reaches from the convex blend towards the brightest material (1:
+    /// all the way; [`crate::query::floor::reach_cap`]); 1 under the other
+    /// rules, which have no cap.
+    pub fn reach(&self) -> [f64; 3] {
+        self.reach
     }
 
     /// The reconstruction of store row `row` in transformed space, `mean + w . z`
@@ -272,9 +289,13 @@ impl<'m> Blend<'m> {
             };
             store.mean()[row] + z
         };
-        let g = blend(self.weights_of_row(row, self.model.dims().bins()));
+        let bins = self.model.dims().bins();
+        let g = blend(self.weights_of_row(row, bins));
         match &self.floor {
-            Some(v) => floor_capped(g, blend(v), store.mean()[row] + row_top(store, row)),
+            Some(v) => {
+                let (c, top) = (blend(v), store.mean()[row] + row_top(store, row));
+                floor_capped(g, c, reach_cap(c, top, self.reach[row / bins]))
+            }
             None => g,
         }
     }
@@ -306,6 +327,10 @@ impl<'m> Blend<'m> {
             match store.z() {
                 Rows::F32(z) => self.floor_inputs(v, banded, &z[rows], mean, out, c, top),
                 Rows::F64(z) => self.floor_inputs(v, banded, &z[rows], mean, out, c, top),
+            }
+            let bins = self.model.dims().bins();
+            for (k, (top, &c)) in top.iter_mut().zip(c.iter()).enumerate() {
+                *top = reach_cap(c, *top, self.reach[(r + k) / bins]);
             }
             floor_values(out, c, top);
         }

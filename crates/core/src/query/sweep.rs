@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use crate::dense::product::matmul;
 use crate::error::Result;
 use crate::model::Model;
-use crate::query::exact::floor_of;
+use crate::query::exact::{PassWeights, floor_of};
 use crate::query::floor::{floor_points, top_of};
 use crate::query::plausibility::{BlendRule, ClampSums, Plausibility};
 use crate::simd::fold::{GROUPS, ordered_blocks};
@@ -48,7 +48,11 @@ impl Model {
         if m == 0 {
             return Ok(Vec::new());
         }
-        let (a, av) = self.pass_weights(points, floor)?;
+        let PassWeights {
+            gp: a,
+            convex: av,
+            reach,
+        } = self.pass_weights(points, floor)?;
         let store = self.store();
         let (n, bins) = (store.n(), self.dims().bins());
         let (mean, unmeasured) = (store.mean(), store.unmeasured());
@@ -78,7 +82,7 @@ impl Model {
                     let t = &mut t[k * m..(k + 1) * m];
                     if floor {
                         let top = top_of(&z[k * n..(k + 1) * n]);
-                        floor_points(t, &v[k * m..(k + 1) * m], mu, top);
+                        floor_points(t, &v[k * m..(k + 1) * m], mu, top, &reach[row / bins]);
                     }
                     let (c, form) = (cosines[bin], transform.inverse_form(bin));
                     for (s, &t) in acc.iter_mut().zip(t.iter()) {

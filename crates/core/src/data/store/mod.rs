@@ -42,10 +42,12 @@ use crate::error::{CoreError, Result};
 use crate::progress::Progress;
 
 mod build;
+mod energy;
 
 pub use build::build_store;
 pub(crate) use build::build_unnamed;
 use build::gram_fold;
+pub(crate) use energy::EnergyBound;
 
 use crate::dense::gram::syrk_lower_add;
 use crate::dense::gram32::syrk_lower_add_f32;
@@ -155,6 +157,8 @@ pub struct Store {
     transform: TransformKind,
     precision: Precision,
     layout: Layout,
+    /// What bounds the default rule's energy ([`energy`]), once asked for.
+    energy: std::sync::OnceLock<EnergyBound>,
 }
 
 impl std::fmt::Debug for Store {
@@ -255,7 +259,15 @@ impl Store {
             transform,
             precision,
             layout,
+            energy: std::sync::OnceLock::new(),
         })
+    }
+
+    /// What keeps the default rule's material under a directional albedo
+    /// of 1 ([`energy`]): computed on first use (one pass over 4% of the
+    /// store), then kept.
+    pub(crate) fn energy_bound(&self) -> &EnergyBound {
+        self.energy.get_or_init(|| EnergyBound::of(self))
     }
 
     /// The file behind the map.
