@@ -237,10 +237,11 @@ fn the_default_rule_keeps_a_material_at_its_own_point() {
 }
 
 #[test]
-fn a_quarter_of_the_bins_gives_the_dense_albedo_at_full_resolution() {
+fn a_quarter_or_an_eighth_of_the_bins_gives_the_dense_albedo_at_full_resolution() {
     // At the MERL resolution the albedo integrand is smooth in phi_d: every
-    // 4th bin, weights gathered, is within 0.02% of the dense rule for
-    // sharp synthetic metals and for the model's blends of them.
+    // 4th or 8th bin, weights gathered, is within 0.01% or 0.03% of the
+    // dense rule for sharp synthetic metals and for the model's blends of
+    // them.
     let tmp = tempfile::tempdir().unwrap();
     let m = fit_materials(
         tmp.path(),
@@ -260,16 +261,20 @@ fn a_quarter_of_the_bins_gives_the_dense_albedo_at_full_resolution() {
         )
         .unwrap()
     };
-    let (dense, quarter) = (run(Every::BIN), run(Every::QUARTER));
     let judged = |f: &brdf_atlas_core::fidelity::Fidelity| {
         let mut all = f.own.clone();
         all.extend(f.held_out.clone().unwrap());
         all
     };
-    for (a, b) in judged(&dense).iter().zip(&judged(&quarter)) {
-        for c in 0..3 {
-            for (x, y) in [(a.albedo[c], b.albedo[c]), (a.predicted[c], b.predicted[c])] {
-                assert!((x - y).abs() <= 2e-4 * x, "{x} vs {y}");
+    let dense = judged(&run(Every::BIN));
+    // Every 8th phi_d bin, what `fit` judges its own points on: within
+    // 0.03% (measured: 0.007% for the quarter, 0.024% for the eighth).
+    for (every, tolerance) in [(Every::QUARTER, 1e-4), (Every::EIGHTH, 3e-4)] {
+        for (a, b) in dense.iter().zip(&judged(&run(every))) {
+            for c in 0..3 {
+                for (x, y) in [(a.albedo[c], b.albedo[c]), (a.predicted[c], b.predicted[c])] {
+                    assert!((x - y).abs() <= tolerance * x, "{every:?}: {x} vs {y}");
+                }
             }
         }
     }
