@@ -244,6 +244,7 @@ fn fit_staged(
     );
     file.inputs = Some(inputs);
     file.fidelity = Some(fidelity.clone());
+    file.energy = Some(store.energy_bound().clone());
     // Both files are complete on disk before either takes its place.
     let json = file.to_json(model)?;
     let staged = stage(model, |w| std::io::Write::write_all(w, &json))

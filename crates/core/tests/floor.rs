@@ -410,3 +410,32 @@ fn the_default_material_reflects_no_more_than_one_nor_than_the_brightest() {
         assert!(gp_over > 0, "{transform:?}: the GP never goes over");
     }
 }
+
+#[test]
+fn the_recorded_bound_is_the_one_the_store_gives() {
+    // The fit records the energy bound in the model file; a model file
+    // without it (written before it was recorded) computes it from the
+    // store on first use, and both give every point the same reach.
+    let tmp = tempfile::tempdir().unwrap();
+    let path = fit(tmp.path(), 12, TransformKind::RelLog);
+    let mut json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    assert!(json.get("energy").is_some(), "the fit recorded no bound");
+    json.as_object_mut().unwrap().remove("energy");
+    let older = tmp.path().join("older.atlas");
+    std::fs::write(&older, serde_json::to_vec(&json).unwrap()).unwrap();
+    std::fs::copy(
+        brdf_atlas_core::store_path_for(&path),
+        brdf_atlas_core::store_path_for(&older),
+    )
+    .unwrap();
+    let (recorded, computed) = (Model::open(&path).unwrap(), Model::open(&older).unwrap());
+    let mut reached = false;
+    for x in POINTS {
+        let a = recorded.at_with(&x, BlendRule::Floor).unwrap().reach();
+        let b = computed.at_with(&x, BlendRule::Floor).unwrap().reach();
+        assert_eq!(a, b, "{x:?}");
+        reached |= a.iter().any(|&r| r < 1.0);
+    }
+    assert!(reached, "every reach is 1");
+}

@@ -13,6 +13,7 @@ use brdf_merl::Dims;
 use faer::MatRef;
 use serde::{Deserialize, Serialize};
 
+use crate::data::store::EnergyBound;
 use crate::data::{Dataset, Precision, Store, StoreIdentity, TransformKind};
 use crate::error::{CoreError, Result};
 use crate::gplvm::kernel::{Kernel, rows_of};
@@ -108,6 +109,12 @@ pub struct ModelFile {
     /// it was measured.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fidelity: Option<Fidelity>,
+    /// What bounds the default rule's energy, as the fit computed it from
+    /// the store (`data::store::EnergyBound`), so that opening the model
+    /// does not read the store for it. Absent in models written before:
+    /// then it is computed on first use.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) energy: Option<EnergyBound>,
 }
 
 impl ModelFile {
@@ -222,6 +229,7 @@ impl ModelFile {
             store: store_ref,
             inputs: None,
             fidelity: None,
+            energy: None,
         }
     }
 }

@@ -125,6 +125,9 @@ impl Model {
 
     /// The model of a checked file and a store that matches it.
     fn assemble(path: PathBuf, file: ModelFile, store: Store) -> Result<Model> {
+        if let Some(bound) = &file.energy {
+            store.keep_energy_bound(bound);
+        }
         let (n, q, dims) = (file.names.len(), file.latent[0].len(), store.dims());
         let gram = Mat::from_fn(n, n, |i, j| file.gram[i][j]);
         let latent = Mat::from_fn(n, q, |i, c| file.latent[i][c]);

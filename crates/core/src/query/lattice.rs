@@ -52,7 +52,9 @@ pub(super) const COARSEST: u32 = 4;
 pub(super) const CHUNK: usize = 256;
 /// What the file says it is.
 const FORMAT: &str = "brdf-atlas lattice";
-const VERSION: u32 = 1;
+/// 2: the floor's cap reaches only as far as keeps every directional
+/// albedo under 1 (a lattice of version 1 holds albedos of the earlier cap).
+const VERSION: u32 = 2;
 
 /// What reading the lattice beside a model gave: the lattice, none, or why
 /// it cannot be used.

@@ -29,8 +29,11 @@
 
 use brdf_merl::directional::{DirectionalRule, INCIDENCE_DEGREES};
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 
 use super::Store;
+use crate::data::transform::InverseForm;
+use crate::simd::fastexp::exp;
 
 /// Incidences times channels: the albedos the bound is kept at.
 const KC: usize = INCIDENCE_DEGREES.len() * 3;
@@ -45,7 +48,7 @@ const MARGIN: f64 = 1e-9;
 
 /// What [`EnergyBound::reach`] needs: the materials' directional albedos
 /// and, where the brightest values' table goes over the bound, its albedo.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub(crate) struct EnergyBound {
     /// Material `i`'s directional albedo at incidence `k`, channel `c`:
     /// `albedo[i * KC + 3 k + c]`.
@@ -56,7 +59,7 @@ pub(crate) struct EnergyBound {
 
 /// One incidence and channel at which the brightest values' table reflects
 /// more than the bound.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 struct Binding {
     /// `3 k + c`.
     kc: usize,
@@ -103,13 +106,22 @@ impl EnergyBound {
                             continue;
                         }
                         store.copy_rows(row, &mut z);
-                        let kc = 3 * k + c;
-                        let mut top = f64::NEG_INFINITY;
-                        for (i, &zi) in z.iter().enumerate() {
-                            top = top.max(zi);
-                            acc[i * KC + kc] += w * transform.inverse(bin, mean[row] + zi);
+                        let (kc, m) = (3 * k + c, mean[row]);
+                        let top = z.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                        // The inverse transform in its closed form, a
+                        // vectorisable loop per row.
+                        let (scale, exponential) = match transform.inverse_form(bin) {
+                            InverseForm::Linear(s) => (s, false),
+                            InverseForm::Exp(s) => (s, true),
+                        };
+                        let value = |t: f64| {
+                            let u = if exponential { exp(t) - 1.0 } else { t };
+                            (scale * u).max(0.0)
+                        };
+                        for (a, &zi) in acc.iter_mut().skip(kc).step_by(KC).zip(&z) {
+                            *a += w * value(m + zi);
                         }
-                        acc[n * KC + kc] += w * transform.inverse(bin, mean[row] + top);
+                        acc[n * KC + kc] += w * value(m + top);
                     }
                 }
                 acc
@@ -129,6 +141,17 @@ impl EnergyBound {
             })
             .collect();
         EnergyBound { albedo, binding }
+    }
+
+    /// Whether this bound can serve a store of `n` materials (a bound read
+    /// from a model file is checked before it is used).
+    pub(crate) fn fits(&self, n: usize) -> bool {
+        self.albedo.len() == n * KC
+            && self.albedo.iter().all(|a| a.is_finite() && *a >= 0.0)
+            && self
+                .binding
+                .iter()
+                .all(|b| b.kc < KC && b.top.is_finite() && b.bound.is_finite() && b.top > b.bound)
     }
 
     /// The reach per channel of a point with convex weights `convex` (one

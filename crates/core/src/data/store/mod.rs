@@ -270,6 +270,15 @@ impl Store {
         self.energy.get_or_init(|| EnergyBound::of(self))
     }
 
+    /// Use `bound` (read from the model file the fit wrote beside this
+    /// store) instead of computing it, if it fits the store and none is
+    /// computed yet.
+    pub(crate) fn keep_energy_bound(&self, bound: &EnergyBound) {
+        if bound.fits(self.n()) {
+            let _ = self.energy.set(bound.clone());
+        }
+    }
+
     /// The file behind the map.
     pub fn path(&self) -> &Path {
         &self.path
