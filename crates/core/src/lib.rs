@@ -60,8 +60,8 @@ pub use progress::{NoProgress, Progress};
 pub use query::measure;
 pub use query::{
     AlbedoLattice, AlbedoMap, AlbedoMethod, Blend, BlendRule, Confidence, DEFAULT_SAMPLES,
-    LATTICE_TOLERANCE, LOW_CONFIDENCE_VARIANCE, Located, Plausibility, Segment, View,
-    contour_levels, contours, lattice_path, luminance,
+    LATTICE_TOLERANCE, LOW_CONFIDENCE_VARIANCE, Located, NODE_PHI_D_STEP, Plausibility, Segment,
+    View, contour_levels, contours, lattice_path, luminance,
 };
 pub use query::{field, floor, render, sheet, swatch};
 pub use simd::fastlog;

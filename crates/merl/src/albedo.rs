@@ -171,6 +171,25 @@ impl Quadrature {
         }
     }
 
+    /// This rule on every `step`-th phi_d bin: each run of `step` phi_d bins
+    /// (the last one shorter) is read at its middle bin, which carries the
+    /// run's summed weight, so the rule stays an integral over the whole
+    /// table of a piecewise-constant surrogate. The albedo integrand is
+    /// smooth in phi_d: at the MERL resolution every 8th bin is within
+    /// 0.05% of this rule on sharp synthetic metals, dielectrics and their
+    /// blends (tested), with an eighth of the bins. `step` 0 or 1 gives the
+    /// rule back.
+    pub fn every_phi_d(&self, step: usize) -> Quadrature {
+        let (dims, step) = (self.dims, step.max(1));
+        let mut dense = vec![0.0f64; dims.bins()];
+        for (&b, &w) in self.bins.iter().zip(&self.weights) {
+            let (ih, id, ip) = dims.unbin(b as usize);
+            let kept = (ip / step * step + step / 2).min(dims.phi_d - 1);
+            dense[dims.bin(ih, id, kept)] += w;
+        }
+        Quadrature::compact(dims, dense)
+    }
+
     /// The grid this rule is for.
     pub fn dims(&self) -> Dims {
         self.dims
@@ -234,6 +253,46 @@ mod tests {
 
     fn lambert(dims: Dims, rho: [f64; 3]) -> MerlTable {
         MerlTable::from_fn(dims, |_| Some(rho.map(|r| r / PI)))
+    }
+
+    #[test]
+    fn every_8th_phi_d_bin_gives_the_dense_albedo_of_sharp_materials_and_blends() {
+        // Metals from mirror-like (alpha 0.03) to rough and dielectrics, at
+        // the MERL resolution, and the average of each neighbouring pair.
+        let dims = Dims::MERL;
+        let dense = Quadrature::dense(dims, 2);
+        let reduced = dense.every_phi_d(8);
+        assert!(
+            reduced.len() * 7 < dense.len(),
+            "{} of {}",
+            reduced.len(),
+            dense.len()
+        );
+        let sum = |q: &Quadrature| q.weights().iter().sum::<f64>();
+        assert!((sum(&reduced) - sum(&dense)).abs() < 1e-12 * sum(&dense));
+        let tables: Vec<MerlTable> = crate::synth::database(6, 11)
+            .iter()
+            .map(|m| m.brdf.table(dims))
+            .collect();
+        let mut worst = 0.0f64;
+        for (k, t) in tables.iter().enumerate() {
+            let next = &tables[(k + 1) % tables.len()];
+            let blend = |b: usize| {
+                let (a, c) = (t.rgb_or_zero(b), next.rgb_or_zero(b));
+                [0, 1, 2].map(|i| 0.5 * (a[i] + c[i]))
+            };
+            for (want, got) in [
+                (dense.albedo(t), reduced.albedo(t)),
+                (dense.integrate(blend), reduced.integrate(blend)),
+            ] {
+                for c in 0..3 {
+                    worst = worst.max((got[c] - want[c]).abs() / want[c]);
+                }
+            }
+        }
+        assert!(worst <= 5e-4, "worst {worst}");
+        // A step of 1 is the rule itself.
+        assert_eq!(dense.every_phi_d(1), dense);
     }
 
     #[test]

@@ -289,6 +289,9 @@ pub(crate) struct MapBasis {
     /// The dense rule's store rows and weights (`crate::query::exact`'s
     /// `RuleRows`; held by type so that the model does not name the query).
     pub(crate) rule_rows: OnceLock<Box<dyn Any + Send + Sync>>,
+    /// The rows of the map's nodes: the dense rule on fewer phi_d bins
+    /// (`crate::query::exact`'s `RuleRows`).
+    pub(crate) node_rows: OnceLock<Box<dyn Any + Send + Sync>>,
     /// The rows of the map's per-pixel rule at its default sample count,
     /// which plan a field (`crate::query::exact`'s `RuleRows`).
     pub(crate) plan_rows: OnceLock<Box<dyn Any + Send + Sync>>,

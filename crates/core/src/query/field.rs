@@ -244,10 +244,10 @@ impl Model {
 
     /// The node budget of a `pixels`-pixel map's field: as many exact
     /// albedos as cost what integrating every pixel with `samples` samples
-    /// would (a node reads every row of the dense rule, a pixel about three
-    /// rows a sample), and at least [`MIN_NODES`].
+    /// would (a node reads every row of the nodes' rule, a pixel about
+    /// three rows a sample), and at least [`MIN_NODES`].
     pub fn field_budget(&self, pixels: usize, samples: usize) -> usize {
-        let rows = self.rule_row_count().max(1) as f64;
+        let rows = self.node_rows().rows.len().max(1) as f64;
         let per_pixel = 3.0 * samples as f64;
         ((pixels as f64 * per_pixel / rows) as usize).max(MIN_NODES)
     }
@@ -323,7 +323,7 @@ impl Model {
         floor: bool,
         progress: &dyn Progress,
     ) -> Result<Option<AlbedoField>> {
-        let rows = self.rule_rows();
+        let rows = self.node_rows();
         let Some((albedo, nodes)) = self.albedo_patches(domain, budget, rows, floor, progress)?
         else {
             return Ok(None);

@@ -27,6 +27,7 @@ mod sweep;
 mod view;
 
 pub use contour::{Segment, contour_levels, contours, luminance};
+pub use exact::NODE_PHI_D_STEP;
 pub use lattice::{AlbedoLattice, LATTICE_TOLERANCE, lattice_path};
 pub use locate::Located;
 pub use map::{AlbedoMap, AlbedoMethod, DEFAULT_SAMPLES, View};

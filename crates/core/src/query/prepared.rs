@@ -68,7 +68,7 @@ impl Model {
                         return Err(CoreError::Cancelled);
                     }
                     let points: Vec<[f64; 2]> = chunk.iter().map(|&k| point(k)).collect();
-                    let albedos = self.exact_albedos_with(&points, rule)?;
+                    let albedos = self.node_albedos_with(&points, rule)?;
                     nodes.extend(chunk.iter().copied().zip(albedos));
                     progress.advance(chunk.len() as u64);
                 }
