@@ -18,7 +18,6 @@ use brdf_atlas_core::{
     fit_dir_with,
 };
 use brdf_merl::synth::SplitMix64;
-use rayon::prelude::*;
 
 use super::plot::{Axis, COLORS, Series, chart};
 use super::results::{FidelityRow as Row, Results, Setting};
@@ -132,11 +131,12 @@ fn max_albedo(m: &Model) -> Result<[f64; 2], Error> {
         .map(|_| [rng.range(v.x0, v.x1), rng.range(v.y0, v.y1)])
         .collect();
     // The albedo figures only (no pass over the store for the clamp's),
-    // the points in parallel.
-    let mut a: Vec<f64> = xs
-        .par_iter()
-        .map(|x| Ok(m.at_with(x, BlendRule::Floor)?.largest_albedo().0))
-        .collect::<Result<_, Error>>()?;
+    // every point from one read of the directional rule's rows.
+    let mut a: Vec<f64> = m
+        .largest_albedos(&xs, BlendRule::Floor)?
+        .into_iter()
+        .map(|(a, _)| a)
+        .collect();
     a.sort_by(f64::total_cmp);
     Ok([a[a.len() * 9 / 10], a[a.len() - 1]])
 }

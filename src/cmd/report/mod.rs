@@ -34,7 +34,7 @@ use brdf_atomic::{StagedDir, write_atomic};
 
 use self::plan::Plan;
 use self::results::Results;
-use self::steps::Steps;
+use self::steps::{SectionTime, Steps};
 use crate::args::OptimizerArg;
 use crate::error::Error;
 use crate::format::secs;
@@ -140,7 +140,7 @@ pub fn write(args: &Args, say: &mut dyn Write) -> Result<Summary, Error> {
         source,
     })?;
     let bars = Bars::new(format!("opening {}", args.dir.display()));
-    let t = Instant::now();
+    let (t, cpu) = (Instant::now(), machine::cpu_time());
     let data = Dataset::open_dir(&args.dir)?;
     let n = data.len();
     if n < 3 {
@@ -153,7 +153,12 @@ pub fn write(args: &Args, say: &mut dyn Write) -> Result<Summary, Error> {
         names: data.names.clone(),
         dims: data.dims().to_string(),
         d: data.dims().values(),
-        scan: t.elapsed(),
+        scan: SectionTime {
+            wall: t.elapsed(),
+            cpu: cpu
+                .zip(machine::cpu_time())
+                .map(|(a, b)| b.saturating_sub(a)),
+        },
         ..Default::default()
     };
     let plan = Plan::new(args, n);
