@@ -64,7 +64,7 @@ pub struct Args {
     pub out: PathBuf,
     #[arg(long, help = plan::q_max_help(), value_parser = clap::value_parser!(u32).range(1..=MAX_Q as i64))]
     pub q_max: Option<u32>,
-    /// Fewer settings (sample counts, map sizes, steps, a 3 x 3 plausibility
+    /// Fewer settings (sample counts, map sizes, steps, a 2 x 2 plausibility
     /// grid, leave-one-out errors on every 4th phi_d bin): a report in
     /// seconds on small data. It leaves the prepared map out unless
     /// --prepare is given.
@@ -165,8 +165,8 @@ pub fn write(args: &Args, say: &mut dyn Write) -> Result<Summary, Error> {
     drop(bars);
     let mut steps = Steps::new(start, say);
     steps.section("Fidelity: the settings compared");
-    fidelity::measure(&args.dir, &work, args.quick, &mut steps, &mut r)?;
-    measure::measure(&data, &plan, &work, &mut steps, &mut r)?;
+    let log = fidelity::measure(&data, &work, args.quick, &mut steps, &mut r)?;
+    measure::measure(&data, &plan, &work, log, &mut steps, &mut r)?;
     let sizes: Vec<usize> = args.growth.iter().map(|&n| n as usize).collect();
     if !sizes.is_empty() {
         steps.section("Growth: fits of synthetic databases");
