@@ -1,8 +1,27 @@
 //! What the report says about the machine it measured on: the CPU model,
-//! the load average and today's date. Each reads the system (Linux `/proc`,
-//! the clock) and says `unknown` where it cannot.
+//! the load average, today's date and the CPU time the run has used. Each
+//! reads the system (Linux `/proc`, the clock, `getrusage`) and says
+//! `unknown` where it cannot.
 
-use std::time::SystemTime;
+use std::time::{Duration, SystemTime};
+
+/// The CPU time (user + system, every thread) this process has used so
+/// far, if the system says.
+pub fn cpu_time() -> Option<Duration> {
+    let mut usage = std::mem::MaybeUninit::<libc::rusage>::zeroed();
+    // SAFETY: getrusage writes a whole rusage into the pointer it is given,
+    // which points to one, and reads nothing else.
+    if unsafe { libc::getrusage(libc::RUSAGE_SELF, usage.as_mut_ptr()) } != 0 {
+        return None;
+    }
+    // SAFETY: getrusage returned 0, so it filled the struct (and zeroed
+    // memory is a valid rusage anyway: plain integers).
+    let usage = unsafe { usage.assume_init() };
+    let time = |t: libc::timeval| {
+        Duration::from_secs(t.tv_sec.max(0) as u64) + Duration::from_micros(t.tv_usec.max(0) as u64)
+    };
+    Some(time(usage.ru_utime) + time(usage.ru_stime))
+}
 
 /// `/proc/loadavg`'s first three numbers, if readable.
 pub fn load_average() -> String {

@@ -298,6 +298,35 @@ fn synth_interrupted_writes_all_files_or_none() {
 }
 
 #[test]
+fn synth_and_nbrdf_interrupted_remove_only_the_empty_directories_they_made() {
+    let out = tempfile::tempdir().unwrap();
+    let nbrdf = ["nbrdf", "--count", "3", "--dims", "16,16,32"];
+    for args in [&SYNTH[..], &nbrdf[..]] {
+        // Two levels the run makes: stopped as its first file is staged,
+        // it removes both.
+        let made = out.path().join("new");
+        let dir = made.join("m");
+        let with_dir = [args, &[dir.to_str().unwrap()]].concat();
+        let (code, stderr) = interrupt_at(&with_dir, "stage", libc::SIGINT);
+        assert_eq!(code, Some(130), "{args:?}: {stderr}");
+        assert_eq!(
+            stderr.trim(),
+            "interrupted; nothing was changed",
+            "{args:?}"
+        );
+        assert!(!made.exists(), "{args:?} left {:?}", listing(out.path()));
+        // A directory that was there stays, as it was.
+        let kept = out.path().join("kept");
+        std::fs::create_dir(&kept).unwrap();
+        let into_kept = [args, &[kept.to_str().unwrap()]].concat();
+        let (code, stderr) = interrupt_at(&into_kept, "stage", libc::SIGINT);
+        assert_eq!(code, Some(130), "{args:?}: {stderr}");
+        assert!(kept.is_dir() && listing(&kept).is_empty(), "{args:?}");
+        std::fs::remove_dir(&kept).unwrap();
+    }
+}
+
+#[test]
 fn synth_killed_leaves_nothing_once_the_next_run_is_done() {
     let out = tempfile::tempdir().unwrap();
     let dir: PathBuf = out.path().join("m");

@@ -43,10 +43,11 @@ pub struct Args {
 /// Tabulate and write every material of the database; returns the paths
 /// written, in database order. Every file is written under a temporary name
 /// first and all take their places only once all are written, so a failed
-/// or interrupted run replaces no file and leaves no partial one.
+/// or interrupted run replaces no file and leaves no partial one (and an
+/// interrupted run removes the directories it made, still empty).
 pub fn write_database(args: &Args) -> Result<Vec<PathBuf>, Error> {
     let dir = &args.out_dir;
-    std::fs::create_dir_all(dir).map_err(|source| Error::CreateDir {
+    brdf_atomic::create_dir_all_owned(dir).map_err(|source| Error::CreateDir {
         path: dir.clone(),
         source,
     })?;

@@ -20,6 +20,7 @@ static COMMIT: Mutex<()> = Mutex::new(());
 static REGISTRY: Mutex<Registry> = Mutex::new(Registry {
     paths: Vec::new(),
     swept: Vec::new(),
+    made_dirs: Vec::new(),
     closed: false,
 });
 
@@ -34,6 +35,8 @@ struct Registry {
     /// allocations a leak checker sees as reachable from the static, unlike
     /// a hash table's, which point into the middle of their blocks).
     swept: Vec<PathBuf>,
+    /// Directories [`create_dir_all_owned`] made, outermost first.
+    made_dirs: Vec<PathBuf>,
     /// Set by [`remove_temporaries`]: no new temporary after that.
     closed: bool,
 }
@@ -162,7 +165,41 @@ pub fn remove_temporaries() {
     for p in std::mem::take(&mut reg.paths) {
         remove_any(&p);
     }
+    // Innermost first; a directory that holds anything (an output put in
+    // place, a file of someone else's) stays.
+    for d in std::mem::take(&mut reg.made_dirs).iter().rev() {
+        let _ = std::fs::remove_dir(d);
+    }
     std::mem::forget(reg);
+}
+
+/// Create `dir` and its missing parents, as [`std::fs::create_dir_all`]
+/// does, and remember the ones this call made: an interrupt
+/// ([`remove_temporaries`]) removes each of them that is empty by then, so
+/// a run stopped before its outputs went in leaves no new, empty directory
+/// behind. A directory that existed already is never removed.
+pub fn create_dir_all_owned(dir: &Path) -> io::Result<()> {
+    let mut missing = Vec::new();
+    let mut at = Some(dir);
+    while let Some(d) = at {
+        if d.as_os_str().is_empty() || d.is_dir() {
+            break;
+        }
+        missing.push(d.to_path_buf());
+        at = d.parent();
+    }
+    let mut reg = registry();
+    if reg.closed {
+        return Err(interrupted());
+    }
+    for d in missing.into_iter().rev() {
+        match std::fs::create_dir(&d) {
+            Ok(()) => reg.made_dirs.push(d),
+            Err(e) if e.kind() == io::ErrorKind::AlreadyExists && d.is_dir() => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(())
 }
 
 fn remove_any(p: &Path) {

@@ -47,7 +47,9 @@ use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-pub use cleanup::{committed, critical, remove_temporaries, sweep, temp_path_for};
+pub use cleanup::{
+    committed, create_dir_all_owned, critical, remove_temporaries, sweep, temp_path_for,
+};
 use cleanup::{create_temp, create_unnamed, forget, mark_committed};
 
 /// Write `path` atomically: `fill` writes the whole content into a buffered
@@ -73,6 +75,7 @@ where
     F: FnOnce(&mut BufWriter<&File>) -> io::Result<()>,
 {
     let pending = PendingFile::create(path)?;
+    stop_in_stage();
     {
         let mut w = BufWriter::with_capacity(1 << 20, pending.file());
         fill(&mut w)?;
@@ -329,6 +332,24 @@ fn stop_before_commit() {
         use std::sync::atomic::{AtomicBool, Ordering};
         static DONE: AtomicBool = AtomicBool::new(false);
         if std::env::var_os("BRDF_ATLAS_TEST_STOP_IN").is_some_and(|p| p == "commit")
+            && !DONE.swap(true, Ordering::SeqCst)
+        {
+            // SAFETY: raise has no memory-safety preconditions.
+            unsafe { libc::raise(libc::SIGSTOP) };
+        }
+    }
+}
+
+/// For the tests of interrupted runs: with `BRDF_ATLAS_TEST_STOP_IN=stage`
+/// in its environment the process stops itself (SIGSTOP), once, as its
+/// first staged output ([`stage`]) has been created and before anything is
+/// written into it: the run's output directory exists, nothing is in place.
+fn stop_in_stage() {
+    #[cfg(unix)]
+    {
+        use std::sync::atomic::{AtomicBool, Ordering};
+        static DONE: AtomicBool = AtomicBool::new(false);
+        if std::env::var_os("BRDF_ATLAS_TEST_STOP_IN").is_some_and(|p| p == "stage")
             && !DONE.swap(true, Ordering::SeqCst)
         {
             // SAFETY: raise has no memory-safety preconditions.

@@ -15,7 +15,7 @@ use brdf_atlas_core::{
     AlbedoMap, AlbedoMethod, BlendRule, CoreError, FitOptions, GplvmParams, Model, NoProgress,
     Precision, Progress, TransformKind, View, fit_dir,
 };
-use brdf_merl::{Dims, synth};
+use brdf_merl::{Dims, Quadrature, synth};
 
 const DIMS: Dims = Dims {
     theta_h: 8,
@@ -189,6 +189,39 @@ fn exact_albedos_are_the_dense_rule_on_the_full_reconstruction() {
         }
     }
     assert!(model.exact_albedos(&[[f64::NAN, 0.0]]).is_err());
+}
+
+#[test]
+fn exact_albedos_by_a_rule_are_its_reference_albedos() {
+    let tmp = tempfile::tempdir().unwrap();
+    let points = [[0.0, 0.0], [0.9, -0.4], [-1.05, 1.1], [2.0, 0.5]];
+    for transform in [TransformKind::Log, TransformKind::Raw] {
+        let model = Model::open(fit(tmp.path(), 6, transform)).unwrap();
+        let rule = Quadrature::dense(model.dims(), 1);
+        for blend in [BlendRule::Floor, BlendRule::Gp] {
+            let got = model.exact_albedos_by(&points, blend, &rule).unwrap();
+            for (x, g) in points.iter().zip(&got) {
+                let want = reference_albedo(&model, x, blend, &rule).unwrap();
+                for c in 0..3 {
+                    assert!(
+                        (g[c] - want[c]).abs() <= 1e-12 * want[c].abs().max(1e-3),
+                        "{transform:?} {blend:?} {x:?}: {g:?} against {want:?}"
+                    );
+                }
+            }
+        }
+        let other = Quadrature::dense(Dims::new(4, 4, 8).unwrap(), 1);
+        assert!(
+            model
+                .exact_albedos_by(&points, BlendRule::Gp, &other)
+                .is_err()
+        );
+        assert!(
+            model
+                .exact_albedos_by(&points, BlendRule::Plausible, &rule)
+                .is_err()
+        );
+    }
 }
 
 #[test]

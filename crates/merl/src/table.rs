@@ -412,7 +412,7 @@ pub(crate) fn write_named<M: Sync>(
     name: impl Fn(&M) -> &str + Sync,
     table: impl Fn(&M) -> MerlTable + Sync,
 ) -> Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir).map_err(|e| MerlError::io(dir, e))?;
+    brdf_atomic::create_dir_all_owned(dir).map_err(|e| MerlError::io(dir, e))?;
     let staged = items
         .par_iter()
         .map(|m| table(m).stage(dir.join(format!("{}.binary", name(m)))))

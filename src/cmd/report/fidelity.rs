@@ -8,18 +8,17 @@
 
 use std::io::{self, Write};
 use std::path::Path;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use brdf_atlas_core::fidelity::{Summary, fidelity, known_share, spacing};
 use brdf_atlas_core::loo::Every;
 use brdf_atlas_core::{
-    BlendRule, DEFAULT_NOISE, DEFAULT_TRANSFORM, FitOptions, GplvmParams, Kernel, Model,
-    NoProgress, PAPER_KERNEL, PAPER_TRANSFORM, Precision, StorePolicy, View, default_kernel,
-    fit_dir_with,
+    BlendRule, DEFAULT_NOISE, DEFAULT_TRANSFORM, Dataset, GplvmParams, Kernel, Model, NoProgress,
+    PAPER_KERNEL, PAPER_TRANSFORM, Precision, TransformKind, View, default_kernel,
 };
 use brdf_merl::synth::SplitMix64;
-use rayon::prelude::*;
 
+use super::measure::{Built, build_timed, in_memory_model};
 use super::plot::{Axis, COLORS, Series, chart};
 use super::results::{FidelityRow as Row, Results, Setting};
 use super::steps::Steps;
@@ -64,22 +63,24 @@ pub fn settings(n: usize) -> [Setting; 5] {
 /// Random points of the default view whose materials' plausibility is measured.
 const PLAUSIBILITY_POINTS: usize = 32;
 
-/// Fit every setting on `dir` (one store per transform, in `work`) and
-/// measure it; with `quick`, the paper's, `rel-log` with the paper's
-/// kernel and the default only.
+/// Fit every setting on `data` (one store per transform, in `work`,
+/// shared by that transform's settings) and measure it; with `quick`, the
+/// paper's, `rel-log` with the paper's kernel and the default only. Gives
+/// back the f32 log store, for the leave-one-out section to use.
 pub fn measure(
-    dir: &Path,
+    data: &Dataset,
     work: &Path,
     quick: bool,
     steps: &mut Steps,
     r: &mut Results,
-) -> Result<(), Error> {
+) -> Result<Option<Built>, Error> {
     let all = settings(r.names.len());
     let chosen: Vec<Setting> = if quick {
         vec![all[0], all[2], all[4]]
     } else {
         all.to_vec()
     };
+    let mut stores: Vec<(TransformKind, Built)> = Vec::new();
     for setting in chosen {
         steps.say(&format!(
             "fidelity: {} ({}, l = {}, mu = {:e})",
@@ -88,19 +89,31 @@ pub fn measure(
             setting.kernel.length_scale,
             setting.kernel.noise
         ))?;
-        let model = work.join(format!("fidelity-{}.atlas", setting.transform.name()));
-        let options = FitOptions {
-            params: GplvmParams::new(2)
-                .length_scale(setting.kernel.length_scale)
-                .noise(setting.kernel.noise)
-                .check()?,
-            transform: setting.transform,
-            precision: Precision::F32,
+        let params = GplvmParams::new(2)
+            .length_scale(setting.kernel.length_scale)
+            .noise(setting.kernel.noise)
+            .check()?;
+        // The store of a transform is built by its first setting, whose
+        // fit time includes it.
+        let built_time = match stores.iter().position(|(t, _)| *t == setting.transform) {
+            Some(_) => Duration::ZERO,
+            None => {
+                let b = build_timed(data, setting.transform, Precision::F32, work)?;
+                let time = b.time;
+                stores.push((setting.transform, b));
+                time
+            }
         };
+        let b = &stores
+            .iter()
+            .find(|(t, _)| *t == setting.transform)
+            .expect("built above")
+            .1;
         let t = Instant::now();
-        fit_dir_with(dir, &model, &options, StorePolicy::Reuse, &NoProgress)?;
-        let fit_time = t.elapsed();
-        let m = Model::open(&model)?;
+        let fit = params.fit(&b.gram, &NoProgress)?;
+        let fit_time = built_time + t.elapsed();
+        let name = format!("fidelity-{}", setting.transform.name());
+        let m = in_memory_model(work, &name, data, &fit, &b.store, &b.y, &b.gram)?;
         let f = fidelity(
             m.store(),
             m.latent().as_ref(),
@@ -120,7 +133,10 @@ pub fn measure(
             fit_time,
         });
     }
-    Ok(())
+    Ok(stores
+        .into_iter()
+        .find(|(t, _)| *t == TransformKind::Log)
+        .map(|(_, b)| b))
 }
 
 /// 90th percentile and worst of the largest directional albedo of the
@@ -132,11 +148,12 @@ fn max_albedo(m: &Model) -> Result<[f64; 2], Error> {
         .map(|_| [rng.range(v.x0, v.x1), rng.range(v.y0, v.y1)])
         .collect();
     // The albedo figures only (no pass over the store for the clamp's),
-    // the points in parallel.
-    let mut a: Vec<f64> = xs
-        .par_iter()
-        .map(|x| Ok(m.at_with(x, BlendRule::Floor)?.largest_albedo().0))
-        .collect::<Result<_, Error>>()?;
+    // every point from one read of the directional rule's rows.
+    let mut a: Vec<f64> = m
+        .largest_albedos(&xs, BlendRule::Floor)?
+        .into_iter()
+        .map(|(a, _)| a)
+        .collect();
     a.sort_by(f64::total_cmp);
     Ok([a[a.len() * 9 / 10], a[a.len() - 1]])
 }
@@ -157,6 +174,8 @@ pub fn markdown(w: &mut dyn Write, r: &Results) -> io::Result<()> {
          default view where the predictive variance is below 0.1; `albedo`: the largest \
          directional albedo of the default material at {PLAUSIBILITY_POINTS} random points of \
          the default view (90th percentile / worst; at most 1 for a physical material). \
+         `fit`: building the transform's f32 store and Gram matrix (for the first setting \
+         of each transform; the later ones share them) and the optimiser. \
          `fidelity.csv` has every material.\n"
     )?;
     writeln!(

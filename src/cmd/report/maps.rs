@@ -5,13 +5,12 @@
 
 use std::time::Instant;
 
-use brdf_atlas_core::measure::{map_error, reference_albedo};
+use brdf_atlas_core::measure::map_error;
 use brdf_atlas_core::{
     AlbedoMethod, BlendRule, DEFAULT_SAMPLES, LATTICE_TOLERANCE, Model, NoProgress, View,
 };
 
 use brdf_merl::Quadrature;
-use rayon::prelude::*;
 
 use super::plan::Plan;
 use super::results::{MethodRow, Results, SampleRow, SizeRow};
@@ -29,18 +28,7 @@ pub fn samples(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error>
         .collect();
     let dense = Quadrature::dense(model.dims(), 1);
     let t = Instant::now();
-    // The references are independent: one a thread.
-    let reference = pixels
-        .par_iter()
-        .map(|&(px, py)| {
-            reference_albedo(
-                model,
-                &view.pixel_to_latent(px as f64, py as f64, w, w),
-                BlendRule::default(),
-                &dense,
-            )
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    let reference = references(model, &view, &pixels, w, &dense)?;
     r.reference_time = t.elapsed();
     r.reference_pixels = pixels.len();
     let bars = Bars::new("map sample counts");
@@ -91,13 +79,7 @@ pub fn methods(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error>
         let pixels: Vec<(usize, usize)> = (0..plan.grid * plan.grid)
             .map(|_| (next(), next()))
             .collect();
-        let reference = pixels
-            .par_iter()
-            .map(|&(px, py)| {
-                let x = view.pixel_to_latent(px as f64, py as f64, size, size);
-                reference_albedo(model, &x, BlendRule::default(), model.albedo_rule())
-            })
-            .collect::<Result<Vec<_>, _>>()?;
+        let reference = references(model, &view, &pixels, size, model.albedo_rule())?;
         for samples in [None, Some(DEFAULT_SAMPLES)] {
             // A default that is the per-pixel rule at the default samples
             // is the next row's map: measured once, shown in both rows.
@@ -160,6 +142,24 @@ pub fn methods(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error>
     }
     r.methods_size = size;
     Ok(())
+}
+
+/// The dense references of `pixels` of a `size x size` map of `view`
+/// (the default blend, integrated with `rule`): all of them from one pass
+/// over the rule's rows ([`Model::exact_albedos_by`], equal to
+/// [`brdf_atlas_core::measure::reference_albedo`] point by point to rounding).
+fn references(
+    model: &Model,
+    view: &View,
+    pixels: &[(usize, usize)],
+    size: usize,
+    rule: &Quadrature,
+) -> Result<Vec<[f64; 3]>, Error> {
+    let points: Vec<[f64; 2]> = pixels
+        .iter()
+        .map(|&(px, py)| view.pixel_to_latent(px as f64, py as f64, size, size))
+        .collect();
+    Ok(model.exact_albedos_by(&points, BlendRule::default(), rule)?)
 }
 
 /// The time of a map of each size, log (default samples; the sample

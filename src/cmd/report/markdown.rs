@@ -60,7 +60,7 @@ pub fn write(
         w,
         "Opening and validating the {n} files took {}. Files here: `loo.csv`, `loo-materials.csv`, `fits.csv`, `stores.csv`, \
          `precision.csv`, `map-samples.csv`, `map-size.csv`, `plausibility.csv`, `fidelity.csv`, and the plots below.\n",
-        secs(r.scan)
+        secs(r.scan.wall)
     )?;
     super::fidelity::markdown(w, r)?;
     leave_one_out(w, plan, r)?;
@@ -78,13 +78,16 @@ fn times(w: &mut dyn Write, r: &Results, total: Duration) -> io::Result<()> {
     writeln!(
         w,
         "Wall time of each part of this run, in the order run (the rest of the {} in \
-         all: writing this file and moving the report into place).\n",
+         all: writing this file and moving the report into place), and the CPU time it \
+         used (user + system, every thread; on a shared machine the wall time grows with \
+         the load, the CPU time much less).\n",
         secs(total)
     )?;
-    head(w, &["section", "time"])?;
-    row(w, &[&"Opening and validating the files", &secs(r.scan)])?;
-    for (name, time) in &r.times {
-        row(w, &[name, &secs(*time)])?;
+    head(w, &["section", "wall", "CPU"])?;
+    let scan = ("Opening and validating the files".to_string(), r.scan);
+    for (name, time) in std::iter::once(&scan).chain(&r.times) {
+        let cpu = time.cpu.map_or_else(|| "unknown".to_string(), secs);
+        row(w, &[name, &secs(time.wall), &cpu])?;
     }
     Ok(())
 }
@@ -290,7 +293,8 @@ fn maps(w: &mut dyn Write, plan: &Plan, r: &Results) -> io::Result<()> {
             "![Map error and time vs quadrature samples](map-samples.png)\n\n\
              Error: at {} pixels of a small map, the per-pixel quadrature albedo against \
              the dense rule (every bin, 8 sub-cells) applied to the full reconstruction \
-             at the same latent point ({} for the references), relative to the \
+             at the same latent point ({} for the references, all of them from one pass over \
+             the store), relative to the \
              reference's largest channel. Time: one {}x{} map.\n",
             r.reference_pixels,
             secs(r.reference_time),

@@ -5,7 +5,7 @@
 //! and every fit and the leave-one-out pass of that transform reuse it.
 
 use std::path::Path;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use brdf_atlas_core::loo::{self, Evaluation, Every};
 use brdf_atlas_core::{
@@ -33,17 +33,28 @@ struct Transformed {
     learned: Option<Fit>,
 }
 
+/// A store built for the report, its Gram data and centred Gram matrix
+/// `y`, and how long building it took.
+pub struct Built {
+    pub store: Store,
+    pub gram: GramData,
+    pub y: Mat<f64>,
+    pub time: Duration,
+}
+
 /// Run every measurement of `plan` on `data`, building stores and model
-/// files in `work`, and add the results to `r`.
+/// files in `work`, and add the results to `r`. `log`: the f32 log store
+/// if an earlier section built it (it is not built again).
 pub fn measure(
     data: &Dataset,
     plan: &Plan,
     work: &Path,
+    log: Option<Built>,
     steps: &mut Steps,
     r: &mut Results,
 ) -> Result<(), Error> {
-    let log = per_transform(data, TransformKind::Log, plan, work, steps, r)?;
-    let raw = per_transform(data, TransformKind::Raw, plan, work, steps, r)?;
+    let log = per_transform(data, TransformKind::Log, log, plan, work, steps, r)?;
+    let raw = per_transform(data, TransformKind::Raw, None, plan, work, steps, r)?;
 
     // Store precision: the log store again in f64, the same latent points.
     steps.section("Store precision: the f64 store, f32 vs f64 reconstructions");
@@ -116,6 +127,7 @@ pub fn measure(
 fn per_transform(
     data: &Dataset,
     transform: TransformKind,
+    built: Option<Built>,
     plan: &Plan,
     work: &Path,
     steps: &mut Steps,
@@ -125,8 +137,24 @@ fn per_transform(
     steps.section(format!(
         "Leave-one-out and fits, {name} transform: store, fits, leave-one-out pass"
     ));
-    steps.say(&format!("{name} transform: store and Gram matrix"))?;
-    let (store, gram, y) = build(data, transform, Precision::F32, work, r)?;
+    let (store, gram, y) = match built {
+        Some(b) => {
+            steps.say(&format!(
+                "{name} transform: store and Gram matrix (built by the fidelity section)"
+            ))?;
+            r.stores.push(StoreRow {
+                transform,
+                precision: Precision::F32,
+                time: b.time,
+                bytes: b.store.len_bytes(),
+            });
+            (b.store, b.gram, b.y)
+        }
+        None => {
+            steps.say(&format!("{name} transform: store and Gram matrix"))?;
+            build(data, transform, Precision::F32, work, r)?
+        }
+    };
     steps.say(&format!("{name} transform: fits for q = 1..{}", plan.q_max))?;
     let mut runs: Vec<(&'static str, usize, OptimizerKind)> = (1..=plan.q_max)
         .map(|q| ("gplvm", q, plan.optimizer))
@@ -267,7 +295,7 @@ fn per_transform(
     })
 }
 
-/// Build one store (timed) and its normalised Gram data.
+/// Build one store (timed, and recorded in `r`) and its normalised Gram data.
 fn build(
     data: &Dataset,
     transform: TransformKind,
@@ -275,18 +303,36 @@ fn build(
     work: &Path,
     r: &mut Results,
 ) -> Result<(Store, GramData, Mat<f64>), Error> {
+    let b = build_timed(data, transform, precision, work)?;
+    r.stores.push(StoreRow {
+        transform,
+        precision,
+        time: b.time,
+        bytes: b.store.len_bytes(),
+    });
+    Ok((b.store, b.gram, b.y))
+}
+
+/// Build one store in `work` and its normalised Gram data, timed (the
+/// store; the Gram data is the normalisation of what the pass summed).
+pub fn build_timed(
+    data: &Dataset,
+    transform: TransformKind,
+    precision: Precision,
+    work: &Path,
+) -> Result<Built, Error> {
     let path = work.join(format!("{}-{}.store", transform.name(), precision.name()));
     let bars = Bars::new("store");
     let t = Instant::now();
     let (store, y) = build_store(data, transform, precision, &path, &bars)?;
-    r.stores.push(StoreRow {
-        transform,
-        precision,
-        time: t.elapsed(),
-        bytes: store.len_bytes(),
-    });
+    let time = t.elapsed();
     let gram = GramData::new(y.clone(), store.rows())?;
-    Ok((store, gram, y))
+    Ok(Built {
+        store,
+        gram,
+        y,
+        time,
+    })
 }
 
 /// One fit from the shared Gram data, timed (the optimiser only).
@@ -352,7 +398,7 @@ fn record_loo(
 
 /// The model of `fit` on `store`, in memory (named `work/NAME.atlas` in
 /// messages; nothing is written).
-fn in_memory_model(
+pub fn in_memory_model(
     work: &Path,
     name: &str,
     data: &Dataset,

@@ -34,7 +34,7 @@ use brdf_atomic::{StagedDir, write_atomic};
 
 use self::plan::Plan;
 use self::results::Results;
-use self::steps::Steps;
+use self::steps::{SectionTime, Steps};
 use crate::args::OptimizerArg;
 use crate::error::Error;
 use crate::format::secs;
@@ -64,7 +64,7 @@ pub struct Args {
     pub out: PathBuf,
     #[arg(long, help = plan::q_max_help(), value_parser = clap::value_parser!(u32).range(1..=MAX_Q as i64))]
     pub q_max: Option<u32>,
-    /// Fewer settings (sample counts, map sizes, steps, a 3 x 3 plausibility
+    /// Fewer settings (sample counts, map sizes, steps, a 2 x 2 plausibility
     /// grid, leave-one-out errors on every 4th phi_d bin): a report in
     /// seconds on small data. It leaves the prepared map out unless
     /// --prepare is given.
@@ -140,7 +140,7 @@ pub fn write(args: &Args, say: &mut dyn Write) -> Result<Summary, Error> {
         source,
     })?;
     let bars = Bars::new(format!("opening {}", args.dir.display()));
-    let t = Instant::now();
+    let (t, cpu) = (Instant::now(), machine::cpu_time());
     let data = Dataset::open_dir(&args.dir)?;
     let n = data.len();
     if n < 3 {
@@ -153,15 +153,20 @@ pub fn write(args: &Args, say: &mut dyn Write) -> Result<Summary, Error> {
         names: data.names.clone(),
         dims: data.dims().to_string(),
         d: data.dims().values(),
-        scan: t.elapsed(),
+        scan: SectionTime {
+            wall: t.elapsed(),
+            cpu: cpu
+                .zip(machine::cpu_time())
+                .map(|(a, b)| b.saturating_sub(a)),
+        },
         ..Default::default()
     };
     let plan = Plan::new(args, n);
     drop(bars);
     let mut steps = Steps::new(start, say);
     steps.section("Fidelity: the settings compared");
-    fidelity::measure(&args.dir, &work, args.quick, &mut steps, &mut r)?;
-    measure::measure(&data, &plan, &work, &mut steps, &mut r)?;
+    let log = fidelity::measure(&data, &work, args.quick, &mut steps, &mut r)?;
+    measure::measure(&data, &plan, &work, log, &mut steps, &mut r)?;
     let sizes: Vec<usize> = args.growth.iter().map(|&n| n as usize).collect();
     if !sizes.is_empty() {
         steps.section("Growth: fits of synthetic databases");

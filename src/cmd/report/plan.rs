@@ -55,8 +55,9 @@ pub const REPEAT_BELOW: Duration = Duration::from_millis(250);
 pub const THOROUGH_SAMPLES: usize = 4096;
 /// The map size `--thorough` adds to the size sweep.
 pub const THOROUGH_SIZE: usize = 1024;
-/// The plausibility grid's side by default and under `--thorough`.
-pub const PLAUSIBILITY_GRID: [usize; 2] = [6, 10];
+/// The plausibility grid's side under `--quick`, by default and under
+/// `--thorough`.
+pub const PLAUSIBILITY_GRID: [usize; 3] = [2, 6, 10];
 
 impl Plan {
     /// The plan for `args` on `n` materials.
@@ -82,7 +83,7 @@ impl Plan {
                 timed_size: 128,
                 points: 2,
                 repeat: false,
-                plausibility_grid: 3,
+                plausibility_grid: PLAUSIBILITY_GRID[0],
                 prepare: args.prepare,
                 quarter: true,
             };
@@ -103,7 +104,7 @@ impl Plan {
             timed_size: if args.thorough { 256 } else { 128 },
             points: 4,
             repeat: true,
-            plausibility_grid: PLAUSIBILITY_GRID[usize::from(args.thorough)],
+            plausibility_grid: PLAUSIBILITY_GRID[1 + usize::from(args.thorough)],
             prepare: args.prepare || args.thorough,
             quarter: false,
         }

@@ -23,7 +23,7 @@ pub fn markdown(w: &mut dyn Write, r: &Results, grid: usize) -> io::Result<()> {
     if r.plausibility.is_empty() {
         return Ok(());
     }
-    let thorough = super::plan::PLAUSIBILITY_GRID[1];
+    let [quick, default, thorough] = super::plan::PLAUSIBILITY_GRID;
     writeln!(
         w,
         "## Plausibility: is every point of the map a physical material?\n"
@@ -31,8 +31,9 @@ pub fn markdown(w: &mut dyn Write, r: &Results, grid: usize) -> io::Result<()> {
     writeln!(
         w,
         "![Clamped share of reflectance over the map](plausibility.png)\n\n\
-         At the centres of a {grid} x {grid} grid over the map's default view (`--thorough`: \
-         {thorough} x {thorough}), each point's material is reconstructed with the soft floor (`floor`, the default: the GP's blend with \
+         At the centres of a {grid} x {grid} grid over the map's default view ({quick} x \
+         {quick} with `--quick`, {default} x {default} by default, {thorough} x {thorough} \
+         with `--thorough`), each point's material is reconstructed with the soft floor (`floor`, the default: the GP's blend with \
          each value lifted softly onto a floor at 0.3 times a convex blend's), with the \
          GP's weights as they are (`--blend gp`) and with the plausible rule (`--blend \
          plausible`: in each theta_h bin of the table where the clamp would remove more \

@@ -9,6 +9,8 @@ use std::time::Duration;
 use brdf_atlas_core::fidelity::{Judged, Spacing};
 use brdf_atlas_core::{BlendRule, Kernel, OptimizerKind, Precision, TransformKind};
 
+use super::steps::SectionTime;
+
 /// One fit of the latent points.
 pub struct FitRow {
     pub transform: TransformKind,
@@ -115,7 +117,7 @@ pub struct Results {
     /// Values per material.
     pub d: usize,
     /// Opening and validating the files.
-    pub scan: Duration,
+    pub scan: SectionTime,
     pub stores: Vec<StoreRow>,
     pub fits: Vec<FitRow>,
     pub loo: Vec<LooRow>,
@@ -145,8 +147,8 @@ pub struct Results {
     pub kept_label: &'static str,
     /// Fits of synthetic databases by size (`--growth`).
     pub growth: Vec<GrowthRow>,
-    /// Wall time of each section of the report, in the order run.
-    pub times: Vec<(String, Duration)>,
+    /// Wall and CPU time of each section of the report, in the order run.
+    pub times: Vec<(String, SectionTime)>,
 }
 
 impl Results {

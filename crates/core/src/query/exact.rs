@@ -150,6 +150,27 @@ impl Model {
         self.albedos_over(self.node_rows(), points, floor_of(rule)?)
     }
 
+    /// [`Model::exact_albedos_with`] integrated with another quadrature
+    /// rule of the model's dims: what
+    /// [`reference_albedo`](crate::measure::reference_albedo) gives point
+    /// by point, for all the points in one pass over the rule's rows.
+    /// [`CoreError::BadQuery`] if the rule is for other dims.
+    pub fn exact_albedos_by(
+        &self,
+        points: &[[f64; 2]],
+        blend: BlendRule,
+        rule: &Quadrature,
+    ) -> Result<Vec<[f64; 3]>> {
+        if rule.dims() != self.dims() {
+            return Err(CoreError::BadQuery(format!(
+                "a quadrature rule for {} on a model of {}",
+                rule.dims(),
+                self.dims()
+            )));
+        }
+        self.albedos_over(&self.rows_of(rule), points, floor_of(blend)?)
+    }
+
     /// [`Model::exact_albedos`] with the rows of another rule, and with
     /// every value on its soft floor if `floor`.
     pub(crate) fn albedos_over(

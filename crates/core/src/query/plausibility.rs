@@ -16,7 +16,7 @@
 //! A full [`Plausibility`] reads the whole store once (as a table does); the
 //! confidence costs nothing beyond the weights.
 
-use brdf_merl::directional::largest;
+use brdf_merl::directional::{INCIDENCE_DEGREES, largest};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -148,11 +148,42 @@ impl Model {
         }
     }
 
-    /// The largest directional albedo of a blend (point queries at the
-    /// bins of the directional rule only).
-    pub(crate) fn max_albedo_of(&self, blend: &Blend<'_>) -> f64 {
+    /// The largest directional albedo of each of `blends`, the bits of
+    /// [`Blend::largest_albedo`] (point queries at the bins of the
+    /// directional rule only): each
+    /// incidence's sums run over the rule's bins in the rule's order for
+    /// every blend, as [`brdf_merl::DirectionalRule::integrate`] sums them,
+    /// but a bin's rows are read once for all the blends (while they are in
+    /// cache) rather than once a blend. The incidence angles in parallel.
+    /// With each albedo, its incidence (degrees from the normal).
+    pub(crate) fn max_albedos_of(&self, blends: &[&Blend<'_>]) -> Vec<(f64, f64)> {
         let rule = self.directional_rule();
-        largest(&rule.integrate(|b| blend.rgb_once(b).unwrap_or([0.0; 3]))).0
+        let m = blends.len();
+        let by_incidence: Vec<Vec<[f64; 3]>> = (0..INCIDENCE_DEGREES.len())
+            .into_par_iter()
+            .map(|k| {
+                let entries = rule.start_of(k)..rule.start_of(k + 1);
+                let mut acc = vec![[0.0f64; 3]; m];
+                for (&b, &w) in rule.bins()[entries.clone()]
+                    .iter()
+                    .zip(&rule.weights()[entries])
+                {
+                    for (acc, blend) in acc.iter_mut().zip(blends) {
+                        let v = blend.rgb_once(b as usize).unwrap_or([0.0; 3]);
+                        for c in 0..3 {
+                            acc[c] += w * v[c];
+                        }
+                    }
+                }
+                acc
+            })
+            .collect();
+        (0..m)
+            .map(|j| {
+                let albedos: Vec<[f64; 3]> = by_incidence.iter().map(|a| a[j]).collect();
+                largest(&albedos)
+            })
+            .collect()
     }
 }
 

@@ -211,7 +211,7 @@ impl<'m> Blend<'m> {
 
     /// The weights of store row `row`.
     #[inline]
-    fn weights_of_row(&self, row: usize, bins: usize) -> &[f64] {
+    pub(crate) fn weights_of_row(&self, row: usize, bins: usize) -> &[f64] {
         match &self.bands {
             Some(b) => b.of((row % bins) / b.per),
             None => &self.weights,

@@ -59,12 +59,7 @@ impl Model {
             .collect::<Result<Vec<_>>>()?;
         let convex = self.convex_weights_at(points);
         let steps = self.plausible_steps(&gps, &convex)?;
-        Ok(gps
-            .into_par_iter()
-            .zip(convex)
-            .zip(steps)
-            .map(|((gp, v), t)| self.floored(gp, v, t))
-            .collect())
+        Ok(self.floored(gps, convex, steps))
     }
 
     /// The steps of [`BlendRule::Plausible`](crate::BlendRule::Plausible)
@@ -194,32 +189,66 @@ impl Model {
         budget
     }
 
-    /// The GP blend `gp` moved by `steps` towards `convex`, with the albedo
-    /// floor of [`BlendRule::Plausible`](crate::BlendRule::Plausible): while
-    /// the largest directional albedo is above 1 (or above the convex
+    /// Each GP blend of `gps` moved by its `steps` towards its `convex`
+    /// weights, with the albedo floor of
+    /// [`BlendRule::Plausible`](crate::BlendRule::Plausible): while a
+    /// blend's largest directional albedo is above 1 (or above its convex
     /// blend's, should the materials themselves exceed 1), every bin's step
-    /// is raised to the next floor of [`STEPS`].
-    fn floored<'m>(&'m self, gp: Blend<'m>, convex: Vec<f64>, steps: Vec<f64>) -> Blend<'m> {
+    /// is raised to the next floor of [`STEPS`]. The points go through the
+    /// floors together, so that each round's albedos read the directional
+    /// rule's rows once for all of them ([`Model::max_albedos_of`]); each
+    /// point's decisions and bits are what it would get alone.
+    fn floored<'m>(
+        &'m self,
+        gps: Vec<Blend<'m>>,
+        convex: Vec<Vec<f64>>,
+        steps: Vec<Vec<f64>>,
+    ) -> Vec<Blend<'m>> {
         let per = self.dims().theta_d * self.dims().phi_d;
-        let banded = |steps: Vec<f64>| {
-            let bands = Bands::new(gp.gp_weights(), convex.clone(), steps, per);
-            gp.with_bands(bands)
+        let banded = |j: usize, steps: Vec<f64>| {
+            let bands = Bands::new(gps[j].gp_weights(), convex[j].clone(), steps, per);
+            gps[j].with_bands(bands)
         };
-        let mut b = if steps.iter().all(|&t| t == 0.0) {
-            None
-        } else {
-            Some(banded(steps.clone()))
+        let mut moved: Vec<Option<Blend<'m>>> = (0..gps.len())
+            .map(|j| (!steps[j].iter().all(|&t| t == 0.0)).then(|| banded(j, steps[j].clone())))
+            .collect();
+        let albedos = |moved: &[Option<Blend<'m>>], which: &[usize]| {
+            let blends: Vec<&Blend<'_>> = which
+                .iter()
+                .map(|&j| moved[j].as_ref().unwrap_or(&gps[j]))
+                .collect();
+            self.max_albedos_of(&blends)
+                .into_iter()
+                .map(|(a, _)| a)
+                .collect::<Vec<f64>>()
         };
-        let albedo = |b: &Option<Blend<'_>>| self.max_albedo_of(b.as_ref().unwrap_or(&gp));
-        if albedo(&b) > 1.0 {
-            let ceiling = self.max_albedo_of(&self.at_weights(&convex)).max(1.0);
-            for &floor in &STEPS[1..] {
-                if albedo(&b) <= ceiling {
-                    break;
-                }
-                b = Some(banded(steps.iter().map(|&t| t.max(floor)).collect()));
+        let all: Vec<usize> = (0..gps.len()).collect();
+        let mut albedo = albedos(&moved, &all);
+        let over: Vec<usize> = all.into_iter().filter(|&j| albedo[j] > 1.0).collect();
+        let convex_blends: Vec<Blend<'_>> =
+            over.iter().map(|&j| self.at_weights(&convex[j])).collect();
+        let mut ceiling = vec![1.0f64; gps.len()];
+        let convex_refs: Vec<&Blend<'_>> = convex_blends.iter().collect();
+        for (&j, (a, _)) in over.iter().zip(self.max_albedos_of(&convex_refs)) {
+            ceiling[j] = a.max(1.0);
+        }
+        drop(convex_blends);
+        let mut active = over;
+        for &floor in &STEPS[1..] {
+            active.retain(|&j| albedo[j] > ceiling[j]);
+            if active.is_empty() {
+                break;
+            }
+            for &j in &active {
+                moved[j] = Some(banded(j, steps[j].iter().map(|&t| t.max(floor)).collect()));
+            }
+            for (&j, a) in active.iter().zip(albedos(&moved, &active)) {
+                albedo[j] = a;
             }
         }
-        b.unwrap_or(gp)
+        gps.into_iter()
+            .zip(moved)
+            .map(|(gp, b)| b.unwrap_or(gp))
+            .collect()
     }
 }

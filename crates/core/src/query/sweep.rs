@@ -6,8 +6,10 @@
 //! every point are one product with the points' weights (as the exact
 //! albedos are, [`crate::query::exact`]), so `m` points cost one pass and a
 //! product instead of `m` passes. The largest directional albedo reads only
-//! the directional rule's bins, point by point.
+//! the directional rule's bins, all the points from one read of each
+//! ([`Model::largest_albedos`]).
 
+use brdf_merl::directional::{INCIDENCE_DEGREES, largest};
 use rayon::prelude::*;
 
 use crate::dense::product::matmul;
@@ -16,6 +18,7 @@ use crate::model::Model;
 use crate::query::exact::{PassWeights, floor_of};
 use crate::query::floor::{floor_points, top_of};
 use crate::query::plausibility::{BlendRule, ClampSums, Plausibility};
+use crate::query::reconstruct::Blend;
 use crate::simd::fold::{GROUPS, ordered_blocks};
 
 /// Rows of the store a step of the pass multiplies at once.
@@ -26,7 +29,9 @@ impl Model {
     /// `rule` forms at each of `points`. The GP's blend and the soft floor
     /// take one pass over the store for all the points; the plausible
     /// rule's steps need passes of their own ([`Model::plausible_blends`]
-    /// makes all the points' blends in one), then each point's figures. The
+    /// makes all the points' blends in one), then one more pass for all
+    /// the points' figures (in each `theta_h` bin a blend's weights are
+    /// fixed, so that pass is a product with them too). The
     /// sums run in a fixed order: the answer does not depend on the thread
     /// count, and equals the one-point figures to rounding.
     pub fn plausibilities(
@@ -36,11 +41,17 @@ impl Model {
     ) -> Result<Vec<Plausibility>> {
         if rule == BlendRule::Plausible {
             let points: Vec<Vec<f64>> = points.iter().map(|p| p.to_vec()).collect();
-            return self
-                .plausible_blends(&points)?
+            let blends = self.plausible_blends(&points)?;
+            self.store().verify_cheap()?;
+            let sums = self.banded_clamp_sums(&blends);
+            let blends: Vec<&Blend<'_>> = blends.iter().collect();
+            let out = sums
                 .iter()
-                .map(|b| b.plausibility())
+                .zip(self.max_albedos_of(&blends))
+                .map(|(s, (max_albedo, incidence))| s.figures(max_albedo, incidence))
                 .collect();
+            self.verify()?;
+            return Ok(out);
         }
         let floor = floor_of(rule)?;
         self.store().verify_cheap()?;
@@ -95,16 +106,161 @@ impl Model {
         for part in parts {
             sums.iter_mut().zip(&part).for_each(|(s, p)| s.merge(p));
         }
-        // The points' largest albedos are independent: one a thread.
-        let out = points
-            .par_iter()
-            .zip(sums)
-            .map(|(x, s)| {
-                let (max_albedo, max_albedo_incidence) = self.at_with(x, rule)?.largest_albedo();
-                Ok(s.figures(max_albedo, max_albedo_incidence))
-            })
-            .collect::<Result<Vec<_>>>()?;
+        let albedos = self.largest_albedos(points, rule)?;
+        let out = sums
+            .iter()
+            .zip(albedos)
+            .map(|(s, (max_albedo, incidence))| s.figures(max_albedo, incidence))
+            .collect();
         self.verify()?;
         Ok(out)
+    }
+
+    /// The clamp's sums of `blends`, none of them on the soft floor (the
+    /// GP's, or the plausible rule's weights per `theta_h` bin), from one
+    /// pass over the store: in the rows of one `theta_h` bin of one channel
+    /// every blend's weights are fixed, so a block of them is one product
+    /// with the blends' weights. One task a bin and channel, merged in
+    /// order: the sums do not depend on the thread count.
+    fn banded_clamp_sums(&self, blends: &[Blend<'_>]) -> Vec<ClampSums> {
+        let m = blends.len();
+        let store = self.store();
+        let (n, dims) = (store.n(), self.dims());
+        let (bins, per) = (dims.bins(), dims.theta_d * dims.phi_d);
+        let (mean, unmeasured) = (store.mean(), store.unmeasured());
+        let cosines = self.cosine_products();
+        let transform = self.transform();
+        let parts: Vec<Vec<ClampSums>> = (0..3 * dims.theta_h)
+            .into_par_iter()
+            .map(|task| {
+                let (c, band) = (task / dims.theta_h, task % dims.theta_h);
+                let start = c * bins + band * per;
+                // The blends' weights in this bin, laid out as the pass's
+                // (material t, blend j at t m + j).
+                let a: Vec<f64> = (0..n)
+                    .flat_map(|t| blends.iter().map(move |b| b.weights_of_row(start, bins)[t]))
+                    .collect();
+                let mut acc = vec![ClampSums::default(); m];
+                let (mut z, mut t) = (Vec::new(), Vec::new());
+                for r0 in (start..start + per).step_by(BLOCK) {
+                    let len = BLOCK.min(start + per - r0);
+                    z.resize(n * len, 0.0);
+                    t.resize(m * len, 0.0);
+                    store.copy_rows(r0, &mut z);
+                    matmul(&mut t, &a, &z, n);
+                    for (k, row) in (r0..r0 + len).enumerate() {
+                        if unmeasured[row] != 0 {
+                            continue;
+                        }
+                        let (mu, bin) = (mean[row], row % bins);
+                        let (cos, form) = (cosines[bin], transform.inverse_form(bin));
+                        for (s, &t) in acc.iter_mut().zip(&t[k * m..(k + 1) * m]) {
+                            s.add(form.unclamped(mu + t), cos);
+                        }
+                    }
+                }
+                acc
+            })
+            .collect();
+        let mut sums = vec![ClampSums::default(); m];
+        for part in parts {
+            sums.iter_mut().zip(&part).for_each(|(s, p)| s.merge(p));
+        }
+        sums
+    }
+
+    /// [`Blend::largest_albedo`](crate::Blend::largest_albedo) of the
+    /// material `rule` forms at each of `points` (the GP's blend or the soft
+    /// floor; the plausible rule is refused, as by
+    /// [`Model::exact_albedos_with`]): the largest directional albedo and
+    /// its incidence (degrees). Each store row the directional rule reads
+    /// is read once for all the points, and the sums run in a fixed order:
+    /// the answer does not depend on the thread count, and equals the
+    /// one-point figures to rounding.
+    pub fn largest_albedos(&self, points: &[[f64; 2]], rule: BlendRule) -> Result<Vec<(f64, f64)>> {
+        let floor = floor_of(rule)?;
+        self.store().verify_cheap()?;
+        let m = points.len();
+        if m == 0 {
+            return Ok(Vec::new());
+        }
+        let PassWeights {
+            gp: a,
+            convex: av,
+            reach,
+        } = self.pass_weights(points, floor)?;
+        let store = self.store();
+        let (n, bins) = (store.n(), self.dims().bins());
+        let (mean, unmeasured) = (store.mean(), store.unmeasured());
+        let transform = self.transform();
+        let directional = self.directional_rule();
+        let (rule_bins, weights) = (directional.bins(), directional.weights());
+        let angles = INCIDENCE_DEGREES.len();
+        let incidence: Vec<u8> = (0..angles)
+            .flat_map(|k| {
+                let len = directional.start_of(k + 1) - directional.start_of(k);
+                std::iter::repeat_n(k as u8, len)
+            })
+            .collect();
+        // Sums laid out [incidence][channel][point].
+        let parts = ordered_blocks(
+            rule_bins.len(),
+            BLOCK / 4,
+            GROUPS,
+            || vec![0.0f64; angles * 3 * m],
+            |acc, range| {
+                let len = range.len();
+                let mut z = vec![0.0f64; 3 * len * n];
+                for (k, e) in range.clone().enumerate() {
+                    let bin = rule_bins[e] as usize;
+                    for c in 0..3 {
+                        let at = (3 * k + c) * n;
+                        store.copy_rows(c * bins + bin, &mut z[at..at + n]);
+                    }
+                }
+                let mut t = vec![0.0f64; 3 * len * m];
+                matmul(&mut t, &a, &z, n);
+                let mut v = Vec::new();
+                if floor {
+                    v.resize(3 * len * m, 0.0);
+                    matmul(&mut v, &av, &z, n);
+                }
+                for (k, e) in range.enumerate() {
+                    let bin = rule_bins[e] as usize;
+                    // A bin with a channel never measured counts as 0, as
+                    // in the one-point rule.
+                    if (0..3).any(|c| unmeasured[c * bins + bin] != 0) {
+                        continue;
+                    }
+                    let (w, form) = (weights[e], transform.inverse_form(bin));
+                    for c in 0..3 {
+                        let (row, at) = (c * bins + bin, (3 * k + c) * m);
+                        let mu = mean[row];
+                        let t = &mut t[at..at + m];
+                        if floor {
+                            let top = top_of(&z[(3 * k + c) * n..(3 * k + c + 1) * n]);
+                            floor_points(t, &v[at..at + m], mu, top, &reach[c]);
+                        }
+                        let sums = &mut acc[(incidence[e] as usize * 3 + c) * m..][..m];
+                        for (s, &t) in sums.iter_mut().zip(t.iter()) {
+                            *s += w * form.unclamped(mu + t).max(0.0);
+                        }
+                    }
+                }
+            },
+        );
+        let mut sums = vec![0.0f64; angles * 3 * m];
+        for part in parts {
+            sums.iter_mut().zip(&part).for_each(|(s, p)| *s += p);
+        }
+        self.verify()?;
+        Ok((0..m)
+            .map(|j| {
+                let albedos: Vec<[f64; 3]> = (0..angles)
+                    .map(|k| [0, 1, 2].map(|c| sums[(k * 3 + c) * m + j]))
+                    .collect();
+                largest(&albedos)
+            })
+            .collect())
     }
 }
