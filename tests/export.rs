@@ -151,3 +151,34 @@ fn bad_requests_fail_with_one_line_and_write_nothing() {
     ]);
     assert_eq!(run.status.code(), Some(2));
 }
+
+#[test]
+fn the_report_fits_every_material_and_names_the_worst() {
+    let fx = Fixture::new(4, &[]);
+    let out = fx.path("report");
+    let run = brdf_atlas([
+        "report".as_ref(),
+        fx.data().as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+        "--quick".as_ref(),
+    ]);
+    assert!(run.status.success(), "{}", texts(&run).1);
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    let section = &md[md.find("## Analytic fits").expect("the section")..];
+    assert!(
+        section.contains("| Lambertian of the albedo |"),
+        "{section}"
+    );
+    assert!(section.contains("Worst fits"), "{section}");
+    let csv = std::fs::read_to_string(out.join("analytic.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 4, "{csv}");
+    for row in rows {
+        let cells: Vec<f64> = row.split(',').skip(1).map(|c| c.parse().unwrap()).collect();
+        // Every error is a finite, non-negative number; the glTF fit is
+        // closer than the Lambertian on these synthetic materials.
+        assert!(cells.iter().all(|c| c.is_finite() && *c >= 0.0), "{row}");
+        assert!(cells[0] < cells[2], "{row}");
+    }
+}

@@ -146,6 +146,8 @@ pub struct Compared {
     pub measured: Sphere,
     /// The principled fit's sphere.
     pub fitted: Sphere,
+    /// Wall time of the fits (the principled model and the single lobe).
+    pub fit_time: std::time::Duration,
 }
 
 /// Fit `table` (named `what` in errors) and render it and the fits on
@@ -156,9 +158,11 @@ pub fn compare(
     size: usize,
     lights: &[Light],
 ) -> Result<Compared, Error> {
+    let t0 = std::time::Instant::now();
     let picture = sphere_pixels(FIT_PIXELS, lights);
     let fits = fit_table(table, what, &FitParams::default(), Some(&picture))
         .map_err(|e| Error::Input(e.to_string()))?;
+    let fit_time = t0.elapsed();
     let measured = render(table, size, lights);
     let fitted = render(&Drawn(&fits.principled.model), size, lights);
     let lobe = render(&Drawn(&fits.single_lobe.model), size, lights);
@@ -177,6 +181,7 @@ pub fn compare(
         rendered,
         measured,
         fitted,
+        fit_time,
     })
 }
 
