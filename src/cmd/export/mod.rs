@@ -319,9 +319,10 @@ pub fn run(args: &Args) -> Result<ExitCode, Error> {
         let p = &c.fits.principled.model;
         writeln!(
             out,
-            "{}: {} (fit and render {})",
+            "{}: {} (fit {}; with the table and the pictures {})",
             src.name,
             src.origin,
+            secs(c.fit_time),
             secs(elapsed)
         )?;
         writeln!(
