@@ -13,7 +13,9 @@ import pytest
 mi = pytest.importorskip("mitsuba", reason="the Mitsuba tests need mitsuba (pip install mitsuba)")
 
 import brdf_atlas.mitsuba as bam  # noqa: E402
-from conftest import COPPER, point_of  # noqa: E402
+from conftest import COPPER, LAMBERTIAN, point_of  # noqa: E402
+
+LAMBERT_A = LAMBERTIAN["lambert-a"]
 
 # The swatch renderer's default lights: direction towards the light in
 # camera space (x right, y up, z towards the viewer) and intensity, 1 making
@@ -101,3 +103,22 @@ def test_the_principled_dict_renders_within_the_reported_error(log_model, export
         sharper = dict(principled, roughness=0.5 * principled["roughness"])
         for wrong in [darker, sharper] if "metal" in name else [darker]:
             assert relative(sphere(wrong, seed=7), measured) > budget, (name, wrong)
+
+
+def test_fit_analytic_is_the_exports_fit(data, cli, tmp_path):
+    import brdf_atlas as ba
+
+    # A Lambertian table is the glTF model without its specular layer.
+    d = ba.Material.from_merl(data / "lambert-a.binary").fit_analytic()
+    assert d["table_error"] < 1e-3, d
+    assert np.allclose(d["base_color"], LAMBERT_A, atol=0.01), d
+    assert d["lambertian_table_error"] < 1e-3, d
+    # The same numbers as `brdf-atlas export` of the same file.
+    copper = data / f"{COPPER}.binary"
+    subprocess.run([str(cli), "export", str(copper), "-o", str(tmp_path)], check=True, capture_output=True)
+    record = json.loads((tmp_path / f"{COPPER}.fit.json").read_text())
+    d = ba.Material.from_merl(copper).fit_analytic()
+    for k in ["metallic", "roughness", "specular", "ior"]:
+        assert d[k] == record["parameters"][k], k
+    assert list(d["base_color"]) == record["parameters"]["base_color"]
+    assert d["table_error"] == record["table_error"]["principled"]

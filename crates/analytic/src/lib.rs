@@ -34,6 +34,7 @@ pub mod fit;
 pub mod geometry;
 pub mod principled;
 pub mod samples;
+pub mod sphere;
 
 pub use analytic::Analytic;
 pub use baseline::{GgxLambert, Lambertian};
@@ -42,6 +43,7 @@ pub use fit::{FitParams, Fitted};
 pub use geometry::Geometry;
 pub use principled::Principled;
 pub use samples::Samples;
+pub use sphere::{Light, SWATCH_LIGHTS, sphere_pixels};
 
 use brdf_merl::MerlTable;
 
@@ -57,6 +59,13 @@ pub struct Fits {
     pub single_lobe: Fitted<GgxLambert>,
     /// A Lambertian of the table's albedo (not fitted).
     pub lambertian: Fitted<Lambertian>,
+}
+
+/// The fit `brdf-atlas export` makes: [`fit_table`] with the default
+/// parameters and a sphere of [`sphere::FIT_PIXELS`] under `lights`.
+pub fn fit_as_exported(table: &MerlTable, what: &str, lights: &[Light]) -> Result<Fits> {
+    let picture = sphere_pixels(sphere::FIT_PIXELS, lights);
+    fit_table(table, what, &FitParams::default(), Some(&picture))
 }
 
 /// Fit [`Principled`] and [`GgxLambert`] to `table` with `params` (the

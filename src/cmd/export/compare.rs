@@ -8,21 +8,17 @@
 //! channels: the share of the measured picture's light the fit gets wrong.
 //!
 //! The fit's metric includes a coarser sphere under the same lights
-//! ([`FIT_PIXELS`] across; [`brdf_atlas_analytic::Samples::with_radiance`]),
+//! ([`brdf_atlas_analytic::sphere`]),
 //! so the rendered error is partly in-sample; the same error under two
 //! other lights ([`HELD_OUT_LIGHTS`]), which the fit never sees, is
 //! reported beside it.
 
-use brdf_atlas_analytic::samples::Pixel;
-use brdf_atlas_analytic::{Analytic, FitParams, Fits, fit_table};
-use brdf_atlas_core::swatch::{Light, Reflectance, Sphere, pixel_normal, render};
+use brdf_atlas_analytic::{Analytic, Fits, fit_as_exported};
+use brdf_atlas_core::swatch::{Light, Reflectance, Sphere, render};
 use brdf_merl::{MerlTable, Vec3};
 use rayon::prelude::*;
 
 use crate::error::Error;
-
-/// Side, pixels, of the sphere the fit matches.
-pub const FIT_PIXELS: usize = 48;
 
 /// Lights the fit never sees: from the upper right and from below left.
 pub const HELD_OUT_LIGHTS: [Light; 2] = [
@@ -35,47 +31,6 @@ pub const HELD_OUT_LIGHTS: [Light; 2] = [
         intensity: 0.4,
     },
 ];
-
-/// The pixels of a sphere of `size` pixels under `lights`, as the swatch
-/// renderer forms them: per light facing the pixel's normal, the pair
-/// (light, view) in the pixel's shading frame and the weight `pi E cos`.
-pub fn sphere_pixels(size: usize, lights: &[Light]) -> Vec<Pixel> {
-    let unit = |v: Vec3| {
-        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-        (n.is_finite() && n > 0.0).then(|| v.map(|c| c / n))
-    };
-    let dot = |a: Vec3, b: Vec3| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let cross = |a: Vec3, b: Vec3| {
-        [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ]
-    };
-    let lights: Vec<(Vec3, f64)> = lights
-        .iter()
-        .filter_map(|l| Some((unit(l.direction)?, l.intensity)))
-        .collect();
-    let view = [0.0, 0.0, 1.0];
-    let mut out = Vec::new();
-    for py in 0..size {
-        for px in 0..size {
-            let Some((n, _)) = pixel_normal(px, py, size) else {
-                continue;
-            };
-            let t = unit(cross([0.0, 1.0, 0.0], n)).unwrap_or([1.0, 0.0, 0.0]);
-            let b = cross(n, t);
-            let local = |w: Vec3| [dot(w, t), dot(w, b), dot(w, n)];
-            let terms: Pixel = lights
-                .iter()
-                .filter(|(l, _)| dot(*l, n) > 0.0)
-                .map(|&(l, e)| (local(l), local(view), std::f64::consts::PI * e * dot(l, n)))
-                .collect();
-            out.push(terms);
-        }
-    }
-    out
-}
 
 /// An analytic model as a material the swatch renderer draws.
 pub struct Drawn<'a, M>(pub &'a M);
@@ -159,9 +114,15 @@ pub fn compare(
     lights: &[Light],
 ) -> Result<Compared, Error> {
     let t0 = std::time::Instant::now();
-    let picture = sphere_pixels(FIT_PIXELS, lights);
-    let fits = fit_table(table, what, &FitParams::default(), Some(&picture))
-        .map_err(|e| Error::Input(e.to_string()))?;
+    let analytic_lights: Vec<brdf_atlas_analytic::Light> = lights
+        .iter()
+        .map(|l| brdf_atlas_analytic::Light {
+            direction: l.direction,
+            intensity: l.intensity,
+        })
+        .collect();
+    let fits =
+        fit_as_exported(table, what, &analytic_lights).map_err(|e| Error::Input(e.to_string()))?;
     let fit_time = t0.elapsed();
     let measured = render(table, size, lights);
     let fitted = render(&Drawn(&fits.principled.model), size, lights);
@@ -216,7 +177,11 @@ mod tests {
         };
         let size = 20;
         let sphere = render(&Drawn(&grey), size, &DEFAULT_LIGHTS);
-        let pixels = sphere_pixels(size, &DEFAULT_LIGHTS);
+        let lights = brdf_atlas_analytic::SWATCH_LIGHTS;
+        for (a, b) in lights.iter().zip(&DEFAULT_LIGHTS) {
+            assert_eq!((a.direction, a.intensity), (b.direction, b.intensity));
+        }
+        let pixels = brdf_atlas_analytic::sphere_pixels(size, &lights);
         let covered: Vec<[f32; 3]> = sphere
             .radiance
             .iter()
