@@ -182,3 +182,30 @@ fn the_report_fits_every_material_and_names_the_worst() {
         assert!(cells[0] < cells[2], "{row}");
     }
 }
+
+#[test]
+fn the_fit_is_the_same_whatever_the_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("merl");
+    synth(&data, 2, "30,30,60", 5);
+    let file = &binaries(&data)[0];
+    let record_with = |threads: &str| {
+        let out = dir.path().join(format!("out-{threads}"));
+        let run = std::process::Command::new(env!("CARGO_BIN_EXE_brdf-atlas"))
+            .args([
+                "export".as_ref(),
+                file.as_os_str(),
+                "-o".as_ref(),
+                out.as_os_str(),
+            ])
+            .env("RAYON_NUM_THREADS", threads)
+            .output()
+            .unwrap();
+        assert!(run.status.success(), "{}", texts(&run).1);
+        let stem = file.file_stem().unwrap().to_string_lossy().into_owned();
+        let mut rec = record(&out, &stem);
+        rec.as_object_mut().unwrap().remove("source");
+        rec
+    };
+    assert_eq!(record_with("1"), record_with("2"));
+}
