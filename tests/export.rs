@@ -139,7 +139,12 @@ fn bad_requests_fail_with_one_line_and_write_nothing() {
     let missing = fx.path("missing.binary");
     let run = brdf_atlas(["export".as_ref(), missing.as_os_str(), "-o".as_ref(), o]);
     assert_one_error_line(&run, &["missing.binary"]);
-    assert!(!out.exists() || std::fs::read_dir(&out).unwrap().next().is_none());
+    let run = brdf_atlas(["export".as_ref(), m, "-o".as_ref(), o]);
+    assert_one_error_line(
+        &run,
+        &["model.atlas", "is a model", "--at X,Y or --materials"],
+    );
+    assert!(!out.exists());
     // Usage errors are clap's: status 2.
     let run = brdf_atlas([
         "export".as_ref(),

@@ -62,7 +62,7 @@ pub struct Args {
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     pub out: PathBuf,
     /// Base name of the files for --at or a MERL file [default: at_X_Y, or the file's stem].
-    #[arg(long, value_name = "NAME")]
+    #[arg(long, value_name = "NAME", conflicts_with = "materials")]
     pub name: Option<String>,
     /// How a point's material is formed, as `reconstruct --blend`.
     #[arg(long, value_name = "RULE", default_value = "floor", value_parser = args::blend_rule)]
@@ -129,7 +129,17 @@ impl Sources {
 
 fn sources(args: &Args) -> Result<Sources, Error> {
     if args.at.is_none() && args.materials.is_empty() {
-        let table = MerlTable::read(&args.source)?;
+        let table = MerlTable::read(&args.source).map_err(|e| {
+            // A model given without a point: say what it needs.
+            if Model::open(&args.source).is_ok() {
+                Error::Input(format!(
+                    "{}: is a model; export needs --at X,Y or --materials A,B with it",
+                    args.source.display()
+                ))
+            } else {
+                Error::from(e)
+            }
+        })?;
         return Ok(Sources::File(args.source.clone(), Some(table)));
     }
     let model = Model::open(&args.source)?;
