@@ -18,8 +18,9 @@ use crate::cmd::export::compare::compare;
 use crate::error::Error;
 use crate::format::secs;
 
-/// Side of the spheres with `--quick`.
-const QUICK_SPHERE: usize = 48;
+/// Side of the spheres with `--quick`: smaller than the default, but not
+/// the fit's own 48-pixel picture.
+const QUICK_SPHERE: usize = 64;
 /// Materials named as the worst.
 const WORST: usize = 8;
 
@@ -54,6 +55,7 @@ pub fn measure(
                     c.fits.lambertian.error,
                 ],
                 time: c.fit_time,
+                sphere: size,
             })
         })
         .collect();
@@ -112,11 +114,12 @@ pub fn markdown(w: &mut dyn Write, r: &Results) -> io::Result<()> {
         "Each material fitted as `brdf-atlas export` fits it: glTF 2.0 metallic-roughness with \
          KHR_materials_specular and KHR_materials_ior, in the cosine-weighted log-relative table \
          error over a subsample of bins plus the radiance of a 48-pixel sphere under the swatch \
-         lights. Rendered error: sum |L_fit - L| / sum L over a lit sphere's pixels (linear \
-         radiance, the swatch renderer's default lights); held out: the same under two lights the \
+         lights. Rendered error: sum |L_fit - L| / sum L over a lit sphere's pixels ({size} \
+         across; linear radiance, the swatch renderer's default lights); held out: the same under two lights the \
          fit never sees. Baselines measured the same way: the Lambertian of the material's albedo \
          (not fitted) and one GGX lobe over a Lambertian base (fitted like the glTF model). \
-         Table: `analytic.csv`.\n"
+         Table: `analytic.csv`.\n",
+        size = a[0].sphere
     )?;
     writeln!(
         w,

@@ -197,6 +197,8 @@ pub struct AnalyticRow {
     pub table: [f64; 3],
     /// The fits' wall time (both models).
     pub time: Duration,
+    /// Side of the spheres the rendered errors come from, pixels.
+    pub sphere: usize,
 }
 
 /// One fit of one size.
