@@ -210,6 +210,50 @@ typedef enum BrdfAtlasStatus {
 typedef struct BrdfAtlasModel BrdfAtlasModel;
 
 /**
+ * glTF 2.0 metallic-roughness parameters with `KHR_materials_specular` and
+ * `KHR_materials_ior`, fitted to a material, and the fit's table errors.
+ */
+typedef struct BrdfAtlasAnalytic {
+    /**
+     * `baseColorFactor`, linear RGB in [0, 1].
+     */
+    double base_color[3];
+    /**
+     * `metallicFactor`, [0, 1].
+     */
+    double metallic;
+    /**
+     * `roughnessFactor` (GGX alpha = roughness^2), [0.02, 1].
+     */
+    double roughness;
+    /**
+     * `specularFactor`, [0, 1].
+     */
+    double specular;
+    /**
+     * `specularColorFactor`, linear RGB in [0, 1].
+     */
+    double specular_color[3];
+    /**
+     * `ior`, [1, 3].
+     */
+    double ior;
+    /**
+     * The fit's table error: RMS over a subsample of bins and RGB of
+     * ln((f_fit + 0.001) / (f + 0.001)), weighted by cos_i cos_o.
+     */
+    double table_error;
+    /**
+     * The same for one GGX lobe over a Lambertian base, fitted alike.
+     */
+    double single_lobe_table_error;
+    /**
+     * The same for the Lambertian of the material's albedo.
+     */
+    double lambertian_table_error;
+} BrdfAtlasAnalytic;
+
+/**
  * One segment of a contour line of an albedo map, in the map's pixel
  * coordinates: pixel (px, py) covers [px, px + 1) x [py, py + 1), row 0 at
  * the top, so a pixel's centre is at (px + 0.5, py + 0.5).
@@ -351,6 +395,28 @@ typedef struct BrdfAtlasLocation {
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
+
+/**
+ * Fit the analytic material of latent point (x, y) (the default blend
+ * rule's material, as `brdf_atlas_model_reconstruct`), as `brdf-atlas
+ * export` does: reconstructs the whole table, then fits for one to a
+ * few seconds on one thread. The result depends on the point only, never on
+ * the thread count.
+ *
+ * Ownership: `model` is borrowed; `out` (caller-owned) is written on
+ * success only.
+ *
+ * Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (x or y NaN or infinite; or
+ * a material with too few measured bins to fit), UNSUPPORTED (the model is
+ * not 2-D), BAD_FILE (the store changed on disk while the model was open).
+ *
+ * # Safety
+ * `model` is NULL or a live handle; `out` is NULL or valid for writing.
+ */
+enum BrdfAtlasStatus brdf_atlas_model_fit_analytic(const struct BrdfAtlasModel *model,
+                                                   double x,
+                                                   double y,
+                                                   struct BrdfAtlasAnalytic *out);
 
 /**
  * `count` luminance levels evenly spaced strictly inside the luminance

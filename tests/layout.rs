@@ -22,6 +22,7 @@ const ROOTS: &[&str] = &[
     "crates/atomic/src",
     "crates/mapguard/src",
     "crates/merl/src",
+    "crates/analytic/src",
     "crates/ffi/src",
     "crates/hostile/src",
     "python/src",

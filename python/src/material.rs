@@ -238,6 +238,49 @@ impl PyMaterial {
         Ok((a[0], a[1], a[2]))
     }
 
+    /// The analytic fit `brdf-atlas export` makes of this material: glTF's
+    /// metallic-roughness BRDF with KHR_materials_specular and
+    /// KHR_materials_ior, fitted in the cosine-weighted log-relative table
+    /// error plus a lit sphere under the swatch lights (docs/export.md).
+    /// Returns a dict of the parameters (`base_color`, `metallic`,
+    /// `roughness`, `specular`, `specular_color`, `ior`) and the table
+    /// errors of the fit and of the two baselines (`table_error`,
+    /// `single_lobe_table_error`, `lambertian_table_error`).
+    fn fit_analytic<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        let label = self.label.clone();
+        let fits = py.detach(|| {
+            let t = self.source.table()?;
+            brdf_atlas_analytic::fit_as_exported(&t, &label, &brdf_atlas_analytic::SWATCH_LIGHTS)
+                .map_err(|e| Failure::input(e.to_string()))
+        })?;
+        let p = fits.principled.model;
+        let d = pyo3::types::PyDict::new(py);
+        d.set_item(
+            "model",
+            <brdf_atlas_analytic::Principled as brdf_atlas_analytic::Analytic>::NAME,
+        )?;
+        d.set_item(
+            "base_color",
+            (p.base_color[0], p.base_color[1], p.base_color[2]),
+        )?;
+        d.set_item("metallic", p.metallic)?;
+        d.set_item("roughness", p.roughness)?;
+        d.set_item("specular", p.specular)?;
+        d.set_item(
+            "specular_color",
+            (
+                p.specular_color[0],
+                p.specular_color[1],
+                p.specular_color[2],
+            ),
+        )?;
+        d.set_item("ior", p.ior)?;
+        d.set_item("table_error", fits.principled.error)?;
+        d.set_item("single_lobe_table_error", fits.single_lobe.error)?;
+        d.set_item("lambertian_table_error", fits.lambertian.error)?;
+        Ok(d)
+    }
+
     /// Draw outgoing directions: `wi` (n, 3), `u` (n, 2) uniform numbers in
     /// [0, 1). `method` is "tabulated" (the material's own lobe, mixed with
     /// 10% cosine sampling; built on first use) or "cosine". Returns `(wo,

@@ -5,6 +5,7 @@
 
 pub mod demo;
 pub mod eval;
+pub mod export;
 pub mod fit;
 pub mod info;
 pub mod locate;

@@ -44,6 +44,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod analytic;
 mod check;
 pub mod consts;
 pub mod contour;
@@ -53,6 +54,7 @@ pub mod plausibility;
 pub mod query;
 pub mod status;
 
+pub use analytic::{BrdfAtlasAnalytic, brdf_atlas_model_fit_analytic};
 pub use consts::{
     BRDF_ATLAS_DEFAULT_VIEW_HALF_WIDTH, BRDF_ATLAS_GIVES_BACK, BRDF_ATLAS_LATENT_LIMIT,
     BRDF_ATLAS_LOW_CONFIDENCE_VARIANCE, BRDF_ATLAS_MARKER_RADIUS, BRDF_ATLAS_MAX_MAP_SIDE,

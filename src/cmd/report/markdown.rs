@@ -69,6 +69,7 @@ pub fn write(
     super::plausible::markdown(w, r, plan.plausibility_grid)?;
     precision(w, r)?;
     super::growth::markdown(w, r)?;
+    super::analytic::markdown(w, r)?;
     times(w, r, total)
 }
 

@@ -10,6 +10,7 @@
 //! when the whole report is done: a failed run leaves no partial report,
 //! and an earlier report stays until the new one is complete.
 
+mod analytic;
 mod csv;
 mod fidelity;
 mod growth;
@@ -50,7 +51,8 @@ use crate::progress::Bars;
 /// error and time vs quadrature samples, the default method against the
 /// per-pixel rule (and the prepared map, with --prepare or --thorough) and
 /// its time vs size; the plausibility of a grid of map points; f32 vs f64
-/// stores; how long each section took. Writes REPORT_DIR/report.md, CSV files and PNG plots. Needs
+/// stores; the analytic (glTF) fit of every material against a Lambertian
+/// and a single GGX lobe, as `export` makes it; how long each section took. Writes REPORT_DIR/report.md, CSV files and PNG plots. Needs
 /// disk for the stores it builds (about 4 times the MERL files' size in
 /// f32) in a staging directory beside REPORT_DIR, removed at the end;
 /// REPORT_DIR appears (or replaces an earlier report) only when complete.
@@ -173,12 +175,15 @@ pub fn write(args: &Args, say: &mut dyn Write) -> Result<Summary, Error> {
         growth::measure(&sizes, &work, &mut steps, &mut r)?;
     }
     std::fs::remove_dir_all(&work).map_err(|source| Error::Write { path: work, source })?;
+    steps.section("Analytic fits: glTF against two baselines");
+    analytic::measure(&data, args.quick, &mut steps, &mut r)?;
 
     steps.section("Tables and plots");
     steps.say("writing tables and plots")?;
     let dir = staged.path();
     csv::write_all(dir, &r)?;
     plausible::csv(dir, &r)?;
+    analytic::csv(dir, &r)?;
     fidelity::csv(dir, &r)?;
     plot::all(dir, &r)?;
     fidelity::picture(dir, &r)?;

@@ -147,6 +147,8 @@ pub struct Results {
     pub kept_label: &'static str,
     /// Fits of synthetic databases by size (`--growth`).
     pub growth: Vec<GrowthRow>,
+    /// The analytic fit of each material and its baselines.
+    pub analytic: Vec<AnalyticRow>,
     /// Wall and CPU time of each section of the report, in the order run.
     pub times: Vec<(String, SectionTime)>,
 }
@@ -185,6 +187,20 @@ pub struct FidelityRow {
     pub max_albedo: [f64; 2],
     /// The fit (store pass, optimisation, own-point pass) and the leave-one-out pass.
     pub fit_time: Duration,
+}
+
+/// One material's analytic fit (`brdf-atlas export`'s) and its baselines.
+#[derive(Debug, Clone)]
+pub struct AnalyticRow {
+    pub name: String,
+    /// Rendered errors: the fit, the single lobe, the Lambertian, the fit under held-out lights.
+    pub rendered: [f64; 4],
+    /// Table errors: the fit, the single lobe, the Lambertian.
+    pub table: [f64; 3],
+    /// The fits' wall time (both models).
+    pub time: Duration,
+    /// Side of the spheres the rendered errors come from, pixels.
+    pub sphere: usize,
 }
 
 /// One fit of one size.

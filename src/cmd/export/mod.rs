@@ -1,0 +1,377 @@
+//! `brdf-atlas export`: a material of the map (or a MERL file) as an
+//! analytic material other tools read: glTF 2.0, MaterialX, Mitsuba 3,
+//! with what the fit loses shown beside it.
+
+pub mod compare;
+mod documents;
+mod gltf;
+
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use brdf_atlas_analytic::samples::EPSILON;
+use brdf_atlas_analytic::{Analytic, Principled};
+use brdf_atlas_core::sheet::{self, Swatch};
+use brdf_atlas_core::swatch::{DEFAULT_LIGHTS, Light};
+use brdf_atlas_core::{BlendRule, Model};
+use brdf_atomic::{PendingFile, commit_all, stage};
+use brdf_merl::MerlTable;
+use serde_json::{Value, json};
+
+use crate::args::{self, Point};
+use crate::error::Error;
+use crate::format::{point, secs};
+
+use compare::{Compared, compare, difference};
+
+/// Side of the comparison's spheres, pixels.
+pub const SPHERE: usize = 128;
+/// How much brighter the difference sphere is drawn than it is.
+const DIFFERENCE_GAIN: f32 = 4.0;
+
+/// Fit an analytic material to a point of the map and write it as glTF,
+/// MaterialX and Mitsuba 3.
+///
+/// The material (at `--at`, at each of `--materials`, or the MERL file
+/// SOURCE) is fitted with glTF 2.0's metallic-roughness BRDF and
+/// KHR_materials_specular (base colour, metallic, roughness, specular
+/// factor and colour) in the cosine-weighted log-relative error over a
+/// subsample of its bins. For each material NAME the directory OUT gets
+/// NAME.glb (a sphere carrying the material), NAME.mtlx (MaterialX,
+/// Standard Surface), NAME.mitsuba.json (a Mitsuba 3 `principled`
+/// dictionary), NAME.png (the measured material, the fit and their
+/// difference times 4, lit spheres under the swatch lights) and
+/// NAME.fit.json (the parameters and every error). Prints the rendered
+/// error (sum |L' - L| / sum L over the sphere's pixels, linear radiance)
+/// beside two baselines measured the same way: the Lambertian of the
+/// material's albedo, and one GGX lobe over a Lambertian base.
+#[derive(Debug, Clone, clap::Args)]
+pub struct Args {
+    /// Model file written by `fit` (with --at or --materials), or a MERL .binary file.
+    #[arg(value_name = "SOURCE")]
+    pub source: PathBuf,
+    /// Latent point x,y of the model.
+    #[arg(long, value_name = "X,Y", value_parser = args::point, allow_hyphen_values = true, conflicts_with = "materials")]
+    pub at: Option<Point>,
+    /// Named materials of the model, at their own points (comma-separated).
+    #[arg(long, value_name = "A,B,C", value_delimiter = ',')]
+    pub materials: Vec<String>,
+    /// Directory to write into (created if missing).
+    #[arg(short = 'o', long = "output", value_name = "OUT")]
+    pub out: PathBuf,
+    /// Base name of the files for --at or a MERL file [default: at_X_Y, or the file's stem].
+    #[arg(long, value_name = "NAME", conflicts_with = "materials")]
+    pub name: Option<String>,
+    /// How a point's material is formed, as `reconstruct --blend`.
+    #[arg(long, value_name = "RULE", default_value = "floor", value_parser = args::blend_rule)]
+    pub blend: BlendRule,
+}
+
+/// A table to export and where it came from.
+struct Source {
+    name: String,
+    origin: String,
+    table: MerlTable,
+}
+
+/// Where the tables come from: a MERL file, or a model's points (each
+/// reconstructed only when its turn comes, so one table is in memory).
+enum Sources {
+    /// Read at once (a bad file fails before anything is written), taken on use.
+    File(PathBuf, Option<MerlTable>),
+    Points(Box<Model>, Vec<(String, Vec<f64>)>),
+}
+
+impl Sources {
+    fn len(&self) -> usize {
+        match self {
+            Sources::File(..) => 1,
+            Sources::Points(_, points) => points.len(),
+        }
+    }
+
+    fn get(&mut self, k: usize, args: &Args) -> Result<Source, Error> {
+        match self {
+            Sources::File(path, table) => {
+                let table = table
+                    .take()
+                    .ok_or_else(|| Error::Input(format!("{}: asked for twice", path.display())))?;
+                let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned());
+                Ok(Source {
+                    name: args
+                        .name
+                        .clone()
+                        .or(stem)
+                        .unwrap_or_else(|| "material".into()),
+                    origin: path.display().to_string(),
+                    table,
+                })
+            }
+            Sources::Points(model, points) => {
+                let (name, x) = &points[k];
+                let table = model.at_with(x, args.blend)?.table()?;
+                Ok(Source {
+                    origin: format!(
+                        "{} at {} ({} blend)",
+                        model.path().display(),
+                        point(x),
+                        args.blend.name()
+                    ),
+                    name: name.clone(),
+                    table,
+                })
+            }
+        }
+    }
+}
+
+fn sources(args: &Args) -> Result<Sources, Error> {
+    if args.at.is_none() && args.materials.is_empty() {
+        let table = MerlTable::read(&args.source).map_err(|e| {
+            // A model given without a point: say what it needs.
+            if Model::open(&args.source).is_ok() {
+                Error::Input(format!(
+                    "{}: is a model; export needs --at X,Y or --materials A,B with it",
+                    args.source.display()
+                ))
+            } else {
+                Error::from(e)
+            }
+        })?;
+        return Ok(Sources::File(args.source.clone(), Some(table)));
+    }
+    let model = Model::open(&args.source)?;
+    let mut points: Vec<(String, Vec<f64>)> = Vec::new();
+    if let Some(at) = &args.at {
+        let x = at.check(model.q(), &args.source)?.to_vec();
+        let coords: Vec<String> = x.iter().map(|v| format!("{v:.3}")).collect();
+        let name = args
+            .name
+            .clone()
+            .unwrap_or_else(|| format!("at_{}", coords.join("_")));
+        points.push((name, x));
+    }
+    let latent = model.latent();
+    for name in &args.materials {
+        let i = model
+            .names()
+            .iter()
+            .position(|n| n == name)
+            .ok_or_else(|| {
+                Error::Input(format!(
+                    "{}: no material named {name:?} (see `brdf-atlas map`'s sidecar for the names)",
+                    model.path().display()
+                ))
+            })?;
+        points.push((
+            name.clone(),
+            (0..model.q()).map(|k| latent[(i, k)]).collect(),
+        ));
+    }
+    for (k, (name, _)) in points.iter().enumerate() {
+        if points[..k].iter().any(|(n, _)| n == name) {
+            return Err(Error::Input(format!(
+                "{}: {name:?} is asked for twice",
+                args.source.display()
+            )));
+        }
+    }
+    Ok(Sources::Points(Box::new(model), points))
+}
+
+/// The fit's record: parameters, errors and how they were measured.
+fn record(src: &Source, c: &Compared, lights: &[Light]) -> Value {
+    let p = &c.fits.principled;
+    json!({
+        "format": "brdf-atlas-export",
+        "version": 1,
+        "name": src.name,
+        "source": src.origin,
+        "model": Principled::NAME,
+        "parameters": {
+            "base_color": p.model.base_color,
+            "metallic": p.model.metallic,
+            "roughness": p.model.roughness,
+            "specular": p.model.specular,
+            "specular_color": p.model.specular_color,
+            "ior": p.model.ior,
+        },
+        "rendered_error": {
+            "principled": c.rendered.principled,
+            "single_lobe": c.rendered.single_lobe,
+            "lambertian": c.rendered.lambertian,
+            "principled_held_out_lights": c.rendered.held_out,
+            "held_out_lights": compare::HELD_OUT_LIGHTS.iter().map(|l| json!({"direction": l.direction, "intensity": l.intensity})).collect::<Vec<_>>(),
+            "metric": "sum |L_fit - L_measured| / sum L_measured over a lit sphere's pixels (coverage weighted) and RGB, linear radiance",
+            "sphere_pixels": SPHERE,
+            "lights": lights.iter().map(|l| json!({"direction": l.direction, "intensity": l.intensity})).collect::<Vec<_>>(),
+        },
+        "table_error": {
+            "principled": p.error,
+            "single_lobe": c.fits.single_lobe.error,
+            "lambertian": c.fits.lambertian.error,
+            "metric": format!("RMS over a subsample of bins and RGB of ln((f_fit + e) / (f + e)), e = {EPSILON}, weighted by cos_i cos_o"),
+        },
+        "single_lobe": {
+            "diffuse": c.fits.single_lobe.model.diffuse,
+            "specular": c.fits.single_lobe.model.specular,
+            "roughness": c.fits.single_lobe.model.roughness,
+        },
+        "albedo": c.fits.lambertian.model.albedo,
+    })
+}
+
+fn staged(path: &Path, bytes: &[u8]) -> Result<PendingFile, Error> {
+    stage(path, |f| f.write_all(bytes)).map_err(|source| Error::Write {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// The side-by-side picture: measured, fit, difference.
+fn picture(path: &Path, src: &Source, c: &Compared) -> Result<PendingFile, Error> {
+    let diff = difference(&c.measured, &c.fitted, DIFFERENCE_GAIN);
+    let cell = |lines: Vec<String>, sphere| Swatch {
+        point: [0.0; 2],
+        lines,
+        sphere,
+    };
+    let sheet = sheet::compose(
+        &[
+            cell(
+                vec![src.name.clone(), "measured".into()],
+                c.measured.clone(),
+            ),
+            cell(
+                vec![
+                    "glTF fit".into(),
+                    format!("{:.1}% off", 100.0 * c.rendered.principled),
+                ],
+                c.fitted.clone(),
+            ),
+            cell(
+                vec!["|difference|".into(), format!("x{DIFFERENCE_GAIN}")],
+                diff,
+            ),
+        ],
+        3,
+    );
+    Ok(sheet::stage_png(path, &sheet)?)
+}
+
+/// Stage the five files of one material.
+fn stage_all(
+    dir: &Path,
+    src: &Source,
+    c: &Compared,
+    lights: &[Light],
+) -> Result<Vec<PendingFile>, Error> {
+    let p = &c.fits.principled.model;
+    let rec = record(src, c, lights);
+    let note = format!(
+        "brdf-atlas export of {}: rendered error {:.2}% (sum |L' - L| / sum L, swatch lights)",
+        src.origin,
+        100.0 * c.rendered.principled
+    );
+    let file = |ext: &str| dir.join(format!("{}.{ext}", src.name));
+    let mut json_text = serde_json::to_vec_pretty(&rec).map_err(|e| Error::Input(e.to_string()))?;
+    json_text.push(b'\n');
+    let mut mitsuba = serde_json::to_vec_pretty(&documents::mitsuba(p))
+        .map_err(|e| Error::Input(e.to_string()))?;
+    mitsuba.push(b'\n');
+    Ok(vec![
+        staged(
+            &file("glb"),
+            &gltf::glb(p, &src.name, json!({"brdf_atlas": rec})),
+        )?,
+        staged(
+            &file("mtlx"),
+            documents::materialx(p, &src.name, &note).as_bytes(),
+        )?,
+        staged(&file("mitsuba.json"), &mitsuba)?,
+        staged(&file("fit.json"), &json_text)?,
+        picture(&file("png"), src, c)?,
+    ])
+}
+
+/// Run `export`.
+pub fn run(args: &Args) -> Result<ExitCode, Error> {
+    if let Some(name) = &args.name
+        && (name.is_empty() || name.contains(['/', '\\']) || name.starts_with('.'))
+    {
+        return Err(Error::Input(format!(
+            "--name {name:?}: expected a file name without a directory or a leading dot"
+        )));
+    }
+    let mut sources = sources(args)?;
+    if args.out.exists() && !args.out.is_dir() {
+        return Err(Error::Input(format!(
+            "{}: is not a directory",
+            args.out.display()
+        )));
+    }
+    std::fs::create_dir_all(&args.out).map_err(|source| Error::CreateDir {
+        path: args.out.clone(),
+        source,
+    })?;
+    let lights: &[Light] = &DEFAULT_LIGHTS;
+    let mut staged = Vec::new();
+    let mut names = Vec::new();
+    let mut out = io::stdout().lock();
+    for k in 0..sources.len() {
+        let t0 = Instant::now();
+        let src = &sources.get(k, args)?;
+        names.push(src.name.clone());
+        let c = compare(&src.table, &src.name, SPHERE, lights)?;
+        let elapsed = t0.elapsed();
+        let p = &c.fits.principled.model;
+        writeln!(
+            out,
+            "{}: {} (fit {}; with the table and the pictures {})",
+            src.name,
+            src.origin,
+            secs(c.fit_time),
+            secs(elapsed)
+        )?;
+        writeln!(
+            out,
+            "  glTF       base colour ({:.3}, {:.3}, {:.3}), metallic {:.3}, roughness {:.3}, specular {:.3} ({:.3}, {:.3}, {:.3}), ior {:.3}",
+            p.base_color[0],
+            p.base_color[1],
+            p.base_color[2],
+            p.metallic,
+            p.roughness,
+            p.specular,
+            p.specular_color[0],
+            p.specular_color[1],
+            p.specular_color[2],
+            p.ior
+        )?;
+        writeln!(
+            out,
+            "  error      rendered {:.2}% ({:.2}% under other lights; one GGX lobe + Lambertian {:.2}%, Lambertian of the albedo {:.2}%); table {:.4} ({:.4}, {:.4})",
+            100.0 * c.rendered.principled,
+            100.0 * c.rendered.held_out,
+            100.0 * c.rendered.single_lobe,
+            100.0 * c.rendered.lambertian,
+            c.fits.principled.error,
+            c.fits.single_lobe.error,
+            c.fits.lambertian.error
+        )?;
+        staged.extend(stage_all(&args.out, src, &c, lights)?);
+    }
+    if let Sources::Points(model, _) = &sources {
+        model.verify()?;
+    }
+    commit_all(staged)?;
+    for name in &names {
+        writeln!(
+            out,
+            "  wrote {}/{name}.{{glb,mtlx,mitsuba.json,fit.json,png}}",
+            args.out.display(),
+        )?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
