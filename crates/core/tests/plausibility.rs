@@ -472,6 +472,22 @@ fn many_points_in_one_pass_have_the_figures_each_has_alone() {
         }
         // The GP clamps somewhere, so the sums were put to the test.
         assert!(clamped > 0, "{transform:?}: nothing clamped anywhere");
+        // The GP's and the floor's figures from one pass are those of a
+        // pass each, to the bit.
+        let (gp, floor) = m.plausibilities_gp_and_floor(&points).unwrap();
+        let bits = |v: &[brdf_atlas_core::Plausibility]| {
+            v.iter()
+                .map(|p| [p.clamped_reflectance, p.clamped_values, p.max_albedo].map(f64::to_bits))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(
+            bits(&gp),
+            bits(&m.plausibilities(&points, BlendRule::Gp).unwrap())
+        );
+        assert_eq!(
+            bits(&floor),
+            bits(&m.plausibilities(&points, BlendRule::Floor).unwrap())
+        );
     }
     let m = Model::open(fit(tmp.path(), 12, TransformKind::Log)).unwrap();
     assert!(m.plausibilities(&[], BlendRule::Floor).unwrap().is_empty());

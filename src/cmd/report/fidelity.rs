@@ -119,7 +119,7 @@ pub fn measure(
             m.latent().as_ref(),
             &m.file().kernel,
             true,
-            Every::QUARTER,
+            Every::EIGHTH,
             &NoProgress,
         )?;
         let spacing = spacing(m.latent().as_ref());
@@ -168,7 +168,7 @@ pub fn markdown(w: &mut dyn Write, r: &Results) -> io::Result<()> {
         w,
         "Each setting fitted with L-BFGS, then every material judged at its own point (the \
          default rule, the soft floor) and predicted from the others (leave-one-out, closed \
-         form), on every 4th phi_d bin: the relative albedo error of every channel (median / \
+         form), on every 8th phi_d bin (as `fit` judges its own points): the relative albedo error of every channel (median / \
          90th percentile / worst), the log-relative table error (RMSE of ln((v' + e) / (v + e)), \
          e = 0.001, median) and the older ln(1 + v) RMSE (median). `known`: the share of the \
          default view where the predictive variance is below 0.1; `albedo`: the largest \

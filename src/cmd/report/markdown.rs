@@ -131,12 +131,12 @@ fn leave_one_out(w: &mut dyn Write, plan: &Plan, r: &Results) -> io::Result<()> 
          values{}.\n",
         r.scored_rows,
         r.d,
-        if plan.quarter {
-            ", on every 4th phi_d bin (`--quick`)"
+        if plan.eighth {
+            ", on every 8th phi_d bin (`--quick`)"
         } else {
             ""
         },
-        if plan.quarter { " of those bins" } else { "" }
+        if plan.eighth { " of those bins" } else { "" }
     )?;
     head(
         w,

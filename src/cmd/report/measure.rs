@@ -267,8 +267,8 @@ fn per_transform(
     ))?;
     let bars = Bars::new("leave-one-out");
     let t = Instant::now();
-    let every = if plan.quarter {
-        Every::QUARTER
+    let every = if plan.eighth {
+        Every::EIGHTH
     } else {
         Every::BIN
     };

@@ -44,8 +44,8 @@ pub struct Plan {
     pub plausibility_grid: usize,
     /// Measure the prepared map (its lattice takes minutes to build).
     pub prepare: bool,
-    /// Score the leave-one-out passes on every 4th phi_d bin only.
-    pub quarter: bool,
+    /// Score the leave-one-out passes on every 8th phi_d bin only.
+    pub eighth: bool,
 }
 
 /// A run shorter than this is timed three times under `repeat` (the median kept).
@@ -85,7 +85,7 @@ impl Plan {
                 repeat: false,
                 plausibility_grid: PLAUSIBILITY_GRID[0],
                 prepare: args.prepare,
-                quarter: true,
+                eighth: true,
             };
         }
         let mut samples = vec![16, 64, 256, 1024];
@@ -106,7 +106,7 @@ impl Plan {
             repeat: true,
             plausibility_grid: PLAUSIBILITY_GRID[1 + usize::from(args.thorough)],
             prepare: args.prepare || args.thorough,
-            quarter: false,
+            eighth: false,
         }
     }
 

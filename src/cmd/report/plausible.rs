@@ -203,10 +203,12 @@ pub fn measure(
         .iter()
         .map(|x| Ok(model.at(x)?.confidence().variance))
         .collect::<Result<Vec<f64>, Error>>()?;
-    for rule in RULES {
-        // The figures of every point from one pass over the store (the
-        // plausible rule: its steps from one pass, then a pass a point).
-        let figures = model.plausibilities(&points, rule)?;
+    // The soft floor's and the GP's figures of every point from one pass
+    // over the store, the plausible rule's from its own (its steps from one
+    // pass, then one more for all the points).
+    let (gp, floor) = model.plausibilities_gp_and_floor(&points)?;
+    let plausible = model.plausibilities(&points, BlendRule::Plausible)?;
+    for (rule, figures) in RULES.into_iter().zip([floor, gp, plausible]) {
         for ((&x, p), &variance) in points.iter().zip(figures).zip(&variance) {
             r.plausibility.push(PlausibilityRow {
                 transform,

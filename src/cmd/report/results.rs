@@ -147,8 +147,10 @@ pub struct Results {
     pub kept_label: &'static str,
     /// Fits of synthetic databases by size (`--growth`).
     pub growth: Vec<GrowthRow>,
-    /// The analytic fit of each material and its baselines.
+    /// The analytic fit of each material fitted and its baselines.
     pub analytic: Vec<AnalyticRow>,
+    /// Materials in the database the analytic fits were picked from.
+    pub analytic_of: usize,
     /// Wall and CPU time of each section of the report, in the order run.
     pub times: Vec<(String, SectionTime)>,
 }

@@ -54,10 +54,60 @@ impl Model {
             return Ok(out);
         }
         let floor = floor_of(rule)?;
+        let (gp, floored) = self.clamp_pass(points, !floor, floor)?;
+        let sums = if floor { floored } else { gp };
+        self.figures_of(points, rule, &sums)
+    }
+
+    /// [`Model::plausibilities`] of the GP's blend and of the soft floor at
+    /// each of `points`, from one pass over the store for both (the floor
+    /// is the GP's values lifted): the same figures as two calls.
+    pub fn plausibilities_gp_and_floor(
+        &self,
+        points: &[[f64; 2]],
+    ) -> Result<(Vec<Plausibility>, Vec<Plausibility>)> {
+        let (gp, floored) = self.clamp_pass(points, true, true)?;
+        Ok((
+            self.figures_of(points, BlendRule::Gp, &gp)?,
+            self.figures_of(points, BlendRule::Floor, &floored)?,
+        ))
+    }
+
+    /// The figures of `rule`'s material at `points` from their clamp sums,
+    /// with the largest albedos from one more read of the directional rule's
+    /// rows.
+    fn figures_of(
+        &self,
+        points: &[[f64; 2]],
+        rule: BlendRule,
+        sums: &[ClampSums],
+    ) -> Result<Vec<Plausibility>> {
+        if points.is_empty() {
+            return Ok(Vec::new());
+        }
+        let albedos = self.largest_albedos(points, rule)?;
+        let out = sums
+            .iter()
+            .zip(albedos)
+            .map(|(s, (max_albedo, incidence))| s.figures(max_albedo, incidence))
+            .collect();
+        self.verify()?;
+        Ok(out)
+    }
+
+    /// The clamp's sums at each of `points` of the GP's blend (if `gp`) and
+    /// of the soft floor (if `floor`; else empty), from one pass over the
+    /// store.
+    fn clamp_pass(
+        &self,
+        points: &[[f64; 2]],
+        gp: bool,
+        floor: bool,
+    ) -> Result<(Vec<ClampSums>, Vec<ClampSums>)> {
         self.store().verify_cheap()?;
         let m = points.len();
         if m == 0 {
-            return Ok(Vec::new());
+            return Ok((Vec::new(), Vec::new()));
         }
         let PassWeights {
             gp: a,
@@ -69,12 +119,18 @@ impl Model {
         let (mean, unmeasured) = (store.mean(), store.unmeasured());
         let cosines = self.cosine_products();
         let transform = self.transform();
+        let (gm, fm) = (if gp { m } else { 0 }, if floor { m } else { 0 });
         let parts = ordered_blocks(
             store.rows(),
             BLOCK,
             GROUPS,
-            || vec![ClampSums::default(); m],
-            |acc, range| {
+            || {
+                (
+                    vec![ClampSums::default(); gm],
+                    vec![ClampSums::default(); fm],
+                )
+            },
+            |(gacc, facc), range| {
                 let len = range.len();
                 let mut z = vec![0.0f64; n * len];
                 store.copy_rows(range.start, &mut z);
@@ -90,30 +146,30 @@ impl Model {
                         continue;
                     }
                     let (mu, bin) = (mean[row], row % bins);
+                    let (c, form) = (cosines[bin], transform.inverse_form(bin));
                     let t = &mut t[k * m..(k + 1) * m];
+                    for (s, &t) in gacc.iter_mut().zip(t.iter()) {
+                        s.add(form.unclamped(mu + t), c);
+                    }
                     if floor {
                         let top = top_of(&z[k * n..(k + 1) * n]);
                         floor_points(t, &v[k * m..(k + 1) * m], mu, top, &reach[row / bins]);
-                    }
-                    let (c, form) = (cosines[bin], transform.inverse_form(bin));
-                    for (s, &t) in acc.iter_mut().zip(t.iter()) {
-                        s.add(form.unclamped(mu + t), c);
+                        for (s, &t) in facc.iter_mut().zip(t.iter()) {
+                            s.add(form.unclamped(mu + t), c);
+                        }
                     }
                 }
             },
         );
-        let mut sums = vec![ClampSums::default(); m];
-        for part in parts {
-            sums.iter_mut().zip(&part).for_each(|(s, p)| s.merge(p));
+        let (mut gsums, mut fsums) = (
+            vec![ClampSums::default(); gm],
+            vec![ClampSums::default(); fm],
+        );
+        for (g, f) in parts {
+            gsums.iter_mut().zip(&g).for_each(|(s, p)| s.merge(p));
+            fsums.iter_mut().zip(&f).for_each(|(s, p)| s.merge(p));
         }
-        let albedos = self.largest_albedos(points, rule)?;
-        let out = sums
-            .iter()
-            .zip(albedos)
-            .map(|(s, (max_albedo, incidence))| s.figures(max_albedo, incidence))
-            .collect();
-        self.verify()?;
-        Ok(out)
+        Ok((gsums, fsums))
     }
 
     /// The clamp's sums of `blends`, none of them on the soft floor (the
