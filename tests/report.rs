@@ -49,7 +49,7 @@ fn report_writes_every_file_and_fails_atomically() {
         "Leave-one-out",
         "L-BFGS",
         "f64",
-        "on every 4th phi_d bin (`--quick`)",
+        "on every 8th phi_d bin (`--quick`)",
         "a 2 x 2 grid over the map's default view",
     ] {
         assert!(md.contains(want), "report.md lacks {want:?}:\n{md}");
