@@ -112,6 +112,15 @@ impl DirectionalRule {
         self.starts[k.min(self.starts.len() - 1)]
     }
 
+    /// The incidence (index into [`INCIDENCE_DEGREES`]) of each entry of
+    /// [`DirectionalRule::bins`], in order.
+    pub fn incidences(&self) -> impl Iterator<Item = usize> + '_ {
+        self.starts
+            .windows(2)
+            .enumerate()
+            .flat_map(|(k, r)| std::iter::repeat_n(k, r[1] - r[0]))
+    }
+
     /// Directional albedo at each of [`INCIDENCE_DEGREES`] of any function of
     /// the bin (reflectance RGB), summed in a fixed order.
     pub fn integrate(&self, mut f: impl FnMut(usize) -> [f64; 3]) -> Vec<[f64; 3]> {
@@ -160,6 +169,19 @@ pub fn largest(albedos: &[[f64; 3]]) -> (f64, f64) {
 mod tests {
     use super::*;
     use crate::synth::Analytic;
+
+    #[test]
+    fn each_entry_knows_its_incidence() {
+        let rule = DirectionalRule::new(Dims::new(8, 8, 16).unwrap());
+        let k: Vec<usize> = rule.incidences().collect();
+        assert_eq!(k.len(), rule.bins().len());
+        for (e, &k) in k.iter().enumerate() {
+            assert!(
+                (rule.start_of(k)..rule.start_of(k + 1)).contains(&e),
+                "entry {e}"
+            );
+        }
+    }
 
     #[test]
     fn a_lambertian_table_reflects_its_albedo_at_every_incidence() {

@@ -70,14 +70,10 @@ fn albedos(
     let bins = dims.bins();
     let rule = DirectionalRule::new(dims);
     // The rule inverted: each bin it reads, with its (incidence, weight) pairs.
-    let mut entries: Vec<(u32, usize, f64)> = Vec::new();
-    let mut k = 0;
-    for (e, (&b, &w)) in rule.bins().iter().zip(rule.weights()).enumerate() {
-        while e >= rule.start_of(k + 1) {
-            k += 1;
-        }
-        entries.push((b, k, w));
-    }
+    let mut entries: Vec<(u32, usize, f64)> = (rule.bins().iter().zip(rule.weights()))
+        .zip(rule.incidences())
+        .map(|((&b, &w), k)| (b, k, w))
+        .collect();
     entries.sort_by_key(|&(b, k, _)| (b, k));
     let mut read: Vec<(usize, Vec<(usize, f64)>)> = Vec::new();
     for (b, k, w) in entries {

@@ -252,12 +252,7 @@ impl Model {
         let directional = self.directional_rule();
         let (rule_bins, weights) = (directional.bins(), directional.weights());
         let angles = INCIDENCE_DEGREES.len();
-        let incidence: Vec<u8> = (0..angles)
-            .flat_map(|k| {
-                let len = directional.start_of(k + 1) - directional.start_of(k);
-                std::iter::repeat_n(k as u8, len)
-            })
-            .collect();
+        let incidence: Vec<u8> = directional.incidences().map(|k| k as u8).collect();
         // Sums laid out [incidence][channel][point].
         let parts = ordered_blocks(
             rule_bins.len(),

@@ -79,12 +79,8 @@ impl EnergyBound {
         let rule = DirectionalRule::new(dims);
         let transform = store.transform().build(dims);
         let (mean, unmeasured) = (store.mean(), store.unmeasured());
-        // The incidence of every entry of the rule.
-        let incidence: Vec<usize> = (0..INCIDENCE_DEGREES.len())
-            .flat_map(|k| (rule.start_of(k)..rule.start_of(k + 1)).map(move |_| k))
-            .collect();
-        let entries: Vec<(usize, (u32, f64))> = incidence
-            .into_iter()
+        let entries: Vec<(usize, (u32, f64))> = rule
+            .incidences()
             .zip(
                 rule.bins()
                     .iter()
