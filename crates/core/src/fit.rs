@@ -230,7 +230,7 @@ fn fit_staged(
         fit.outcome.latent.as_ref(),
         &fit.kernel,
         false,
-        crate::loo::Every::EIGHTH,
+        crate::fidelity::JUDGED_BINS,
         progress,
     )?;
     let fidelity_time = t4.elapsed();

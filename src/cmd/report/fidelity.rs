@@ -11,7 +11,6 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use brdf_atlas_core::fidelity::{Summary, fidelity, known_share, spacing};
-use brdf_atlas_core::loo::Every;
 use brdf_atlas_core::{
     BlendRule, DEFAULT_NOISE, DEFAULT_TRANSFORM, Dataset, GplvmParams, Kernel, Model, NoProgress,
     PAPER_KERNEL, PAPER_TRANSFORM, Precision, TransformKind, View, default_kernel,
@@ -119,7 +118,7 @@ pub fn measure(
             m.latent().as_ref(),
             &m.file().kernel,
             true,
-            Every::EIGHTH,
+            brdf_atlas_core::fidelity::JUDGED_BINS,
             &NoProgress,
         )?;
         let spacing = spacing(m.latent().as_ref());

@@ -36,6 +36,10 @@ use crate::progress::Progress;
 pub use crate::eval::loo::LOG_REL_OFFSET;
 pub use crate::model::judged::{Fidelity, GIVES_BACK, Judged, MARKER_RADIUS, Spread, Summary};
 
+/// The bins `fit` judges its own points on, and `report` its settings:
+/// every 8th phi_d bin, within 0.03% of the dense albedo.
+pub const JUDGED_BINS: Every = Every::EIGHTH;
+
 /// The GP's blend at every material's own point: `I - mu K^-1`.
 pub fn own_point_predictor(kernel: &Kernel, latent: MatRef<'_, f64>) -> Result<Mat<f64>> {
     let n = latent.nrows();
