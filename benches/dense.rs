@@ -131,9 +131,30 @@ fn product(c: &mut Criterion) {
     g.finish();
 }
 
+/// The shape of a reconstruction or clamp pass at a few latent points: the
+/// points' weights (`m x 100`) times a block of 4096 store rows (`100 x
+/// 4096`), on one thread.
+fn few_points(c: &mut Criterion) {
+    let mut g = c.benchmark_group("product of a few points, m x 100 by 100 x 4096");
+    let (n, rows) = (100, 4096);
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    for m in [1, 4, 7] {
+        let (a, b) = (random(m * n), random(n * rows));
+        let mut out = vec![0.0; m * rows];
+        g.throughput(Throughput::Elements((m * n * rows) as u64));
+        g.bench_with_input(BenchmarkId::new("dense::product", m), &m, |bch, _| {
+            one.install(|| bch.iter(|| matmul(black_box(&mut out), &a, &b, n)));
+        });
+    }
+    g.finish();
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default().sample_size(20);
-    targets = gram, refactorise, product
+    targets = gram, refactorise, product, few_points
 }
 criterion_main!(benches);

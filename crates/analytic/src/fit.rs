@@ -156,7 +156,15 @@ impl<M: Analytic> Run<M> {
                 *c = (a - b) / h;
             }
         }
-        let a = Mat::<f64>::from_fn(n, n, |i, j| dot(&jac[i], &jac[j]));
+        // J^T J: each pair once (it is symmetric).
+        let mut a = Mat::<f64>::zeros(n, n);
+        for i in 0..n {
+            for j in 0..=i {
+                let v = dot(&jac[i], &jac[j]);
+                a[(i, j)] = v;
+                a[(j, i)] = v;
+            }
+        }
         let g = Col::<f64>::from_fn(n, |i| -dot(&jac[i], &self.r));
         let scale = (0..n).map(|i| a[(i, i)]).fold(0.0, f64::max).max(1e-300);
         for _ in 0..12 {
@@ -195,8 +203,24 @@ impl<M: Analytic> Run<M> {
     }
 }
 
+/// `a . b` in four interleaved partial sums (independent chains the
+/// compiler can put in one vector register), added in a fixed order: the
+/// same bits on every CPU.
 fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
+    let mut acc = [0.0f64; 4];
+    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let tail: f64 = ca
+        .remainder()
+        .iter()
+        .zip(cb.remainder())
+        .map(|(x, y)| x * y)
+        .sum();
+    for (x, y) in ca.zip(cb) {
+        for k in 0..4 {
+            acc[k] += x[k] * y[k];
+        }
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
 fn sum_sq(r: &[f64]) -> f64 {

@@ -65,6 +65,7 @@ fn leave_one_out(model: &Model) -> Result<(), Box<dyn std::error::Error>> {
             gp.as_ref(),
             convex.as_ref(),
             &budgets,
+            loo::Every::BIN,
             &NoProgress,
         )?;
         let lc = k.length_scale * loo::CONVEX_LENGTH_RATIO;
@@ -134,7 +135,10 @@ fn sweep(model: &Model, points: usize, seed: u64) -> Result<(), Box<dyn std::err
         let (mut refl, mut vals, mut alb, mut low) = (vec![], vec![], vec![], 0);
         // Every point's figures from one pass over the store (the plausible
         // rule: its steps from one pass, then a pass a point).
-        for (x, p) in xs.iter().zip(model.plausibilities(&xs, rule)?) {
+        for (x, p) in xs
+            .iter()
+            .zip(model.plausibilities(&xs, rule, loo::Every::BIN)?)
+        {
             if p.max_albedo > 1.0 && std::env::var_os("PLAUSIBILITY_SHOW").is_some() {
                 let b = model.at(x)?;
                 let w = b.gp_weights();

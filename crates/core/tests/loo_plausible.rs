@@ -3,7 +3,7 @@
 //! budget per theta_h bin at every step, and its largest directional albedo.
 
 use brdf_atlas_core::fit_dir;
-use brdf_atlas_core::loo::{self, CLAMP_BUDGET, STEPS};
+use brdf_atlas_core::loo::{self, CLAMP_BUDGET, Every, STEPS};
 use brdf_atlas_core::{FitOptions, GplvmParams, Model, NoProgress, Precision, TransformKind};
 use brdf_merl::directional::largest;
 use brdf_merl::{Dims, DirectionalRule, synth};
@@ -16,6 +16,28 @@ const DIMS: Dims = Dims {
 
 #[test]
 fn held_out_steps_equal_a_dense_recomputation() {
+    held_out_steps_against_a_recomputation(Every::BIN);
+}
+
+/// The budgets judged on a subsample of the bins (as the quick report
+/// does): the same recomputation over the kept bins only.
+#[test]
+fn held_out_steps_on_a_subsample_equal_a_recomputation_over_its_bins() {
+    held_out_steps_against_a_recomputation(Every {
+        theta_d: 2,
+        phi_d: 4,
+    });
+}
+
+/// Whether `every` keeps bin `bin`, by its documented rule: in each cell
+/// of `step` indices the middle one (clipped to the last index).
+fn kept(every: Every, bin: usize) -> bool {
+    let (_, id, ip) = DIMS.unbin(bin);
+    let keep = |i: usize, step: usize, len: usize| i == (i / step * step + step / 2).min(len - 1);
+    keep(id, every.theta_d, DIMS.theta_d) && keep(ip, every.phi_d, DIMS.phi_d)
+}
+
+fn held_out_steps_against_a_recomputation(every: Every) {
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("data");
     synth::write_dir(&data, 10, DIMS, 17).unwrap();
@@ -35,6 +57,7 @@ fn held_out_steps_equal_a_dense_recomputation() {
         gp.as_ref(),
         convex.as_ref(),
         &[CLAMP_BUDGET],
+        every,
         &NoProgress,
     )
     .unwrap()
@@ -76,7 +99,7 @@ fn held_out_steps_equal_a_dense_recomputation() {
             let (mut removed, mut total) = (0.0, 0.0);
             for r in 0..store.rows() {
                 let bin = r % bins;
-                if bin / per != band || store.unmeasured()[r] != 0 {
+                if bin / per != band || store.unmeasured()[r] != 0 || !kept(every, bin) {
                     continue;
                 }
                 let v = value(t, r);

@@ -3,7 +3,7 @@
 
 mod common;
 
-use brdf_atlas_core::loo::{CLAMP_BUDGET, CONVEX_LENGTH_RATIO, STEPS};
+use brdf_atlas_core::loo::{CLAMP_BUDGET, CONVEX_LENGTH_RATIO, Every, STEPS};
 use brdf_atlas_core::{BlendRule, FitOptions, GplvmParams, Model, NoProgress, Precision};
 use brdf_atlas_core::{DEFAULT_TRANSFORM, PAPER_KERNEL, TransformKind, default_kernel, fit_dir};
 use brdf_merl::directional::largest;
@@ -17,9 +17,27 @@ fn dense_clamp(m: &Model, w: &[f64]) -> [f64; 4] {
     dense_clamp_by(m, |_| w, None)
 }
 
+/// Whether `every` keeps bin `bin`, by its documented rule: in each cell
+/// of `step` indices the middle one (clipped to the last index).
+fn kept(every: Every, bin: usize) -> bool {
+    let (_, id, ip) = DIMS.unbin(bin);
+    let keep = |i: usize, step: usize, len: usize| i == (i / step * step + step / 2).min(len - 1);
+    keep(id, every.theta_d, DIMS.theta_d) && keep(ip, every.phi_d, DIMS.phi_d)
+}
+
 /// [`dense_clamp`] with the weights of each `theta_h` bin given by `w`,
 /// over the rows of `theta_h` bin `only` (all rows if `None`).
 fn dense_clamp_by<'a>(m: &Model, w: impl Fn(usize) -> &'a [f64], only: Option<usize>) -> [f64; 4] {
+    dense_clamp_kept(m, w, only, Every::BIN)
+}
+
+/// [`dense_clamp_by`] over the bins `every` keeps.
+fn dense_clamp_kept<'a>(
+    m: &Model,
+    w: impl Fn(usize) -> &'a [f64],
+    only: Option<usize>,
+    every: Every,
+) -> [f64; 4] {
     let store = m.store();
     let (n, bins) = (store.n(), DIMS.bins());
     let kind = m.file().transform;
@@ -27,7 +45,10 @@ fn dense_clamp_by<'a>(m: &Model, w: impl Fn(usize) -> &'a [f64], only: Option<us
     let mut z = vec![0.0; n];
     for row in 0..store.rows() {
         let theta_h = DIMS.unbin(row % bins).0;
-        if store.unmeasured()[row] != 0 || only.is_some_and(|b| b != theta_h) {
+        if store.unmeasured()[row] != 0
+            || only.is_some_and(|b| b != theta_h)
+            || !kept(every, row % bins)
+        {
             continue;
         }
         store.copy_rows(row, &mut z);
@@ -447,7 +468,7 @@ fn many_points_in_one_pass_have_the_figures_each_has_alone() {
         }));
         let mut clamped = 0;
         for rule in [BlendRule::Floor, BlendRule::Gp, BlendRule::Plausible] {
-            let together = m.plausibilities(&points, rule).unwrap();
+            let together = m.plausibilities(&points, rule, Every::BIN).unwrap();
             assert_eq!(together.len(), points.len());
             for (x, got) in points.iter().zip(&together) {
                 let want = m.at_with(x, rule).unwrap().plausibility().unwrap();
@@ -474,7 +495,7 @@ fn many_points_in_one_pass_have_the_figures_each_has_alone() {
         assert!(clamped > 0, "{transform:?}: nothing clamped anywhere");
         // The GP's and the floor's figures from one pass are those of a
         // pass each, to the bit.
-        let (gp, floor) = m.plausibilities_gp_and_floor(&points).unwrap();
+        let (gp, floor) = m.plausibilities_gp_and_floor(&points, Every::BIN).unwrap();
         let bits = |v: &[brdf_atlas_core::Plausibility]| {
             v.iter()
                 .map(|p| [p.clamped_reflectance, p.clamped_values, p.max_albedo].map(f64::to_bits))
@@ -482,16 +503,65 @@ fn many_points_in_one_pass_have_the_figures_each_has_alone() {
         };
         assert_eq!(
             bits(&gp),
-            bits(&m.plausibilities(&points, BlendRule::Gp).unwrap())
+            bits(
+                &m.plausibilities(&points, BlendRule::Gp, Every::BIN)
+                    .unwrap()
+            )
         );
         assert_eq!(
             bits(&floor),
-            bits(&m.plausibilities(&points, BlendRule::Floor).unwrap())
+            bits(
+                &m.plausibilities(&points, BlendRule::Floor, Every::BIN)
+                    .unwrap()
+            )
         );
     }
     let m = Model::open(fit(tmp.path(), 12, TransformKind::Log)).unwrap();
-    assert!(m.plausibilities(&[], BlendRule::Floor).unwrap().is_empty());
-    assert!(m.plausibilities(&[[f64::NAN, 0.0]], BlendRule::Gp).is_err());
+    assert!(
+        m.plausibilities(&[], BlendRule::Floor, Every::BIN)
+            .unwrap()
+            .is_empty()
+    );
+    assert!(
+        m.plausibilities(&[[f64::NAN, 0.0]], BlendRule::Gp, Every::BIN)
+            .is_err()
+    );
+}
+
+/// The clamp's figures of many points summed over a subsample of the bins
+/// (what the quick report asks for): a dense recomputation over the same
+/// bins, for the GP's blend and the plausible rule's per-bin weights, the
+/// largest albedo the model's whatever the subsample.
+#[test]
+fn many_points_on_a_subsample_of_the_bins_equal_a_recomputation_over_them() {
+    let tmp = tempfile::tempdir().unwrap();
+    let m = Model::open(fit(tmp.path(), 12, TransformKind::Log)).unwrap();
+    let points: Vec<[f64; 2]> = POINTS.iter().map(|p| [p[0], p[1]]).collect();
+    let every = Every {
+        theta_d: 2,
+        phi_d: 4,
+    };
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1e-12);
+    let mut differs = false;
+    for rule in [BlendRule::Gp, BlendRule::Plausible] {
+        let sub = m.plausibilities(&points, rule, every).unwrap();
+        let all = m.plausibilities(&points, rule, Every::BIN).unwrap();
+        for ((x, got), whole) in points.iter().zip(&sub).zip(&all) {
+            let b = m.at_with(x, rule).unwrap();
+            let d = dense_clamp_kept(&m, |band| b.weights_in(band), None, every);
+            assert!(
+                close(got.clamped_reflectance, d[0] / d[1])
+                    && close(got.clamped_values, d[2] / d[3]),
+                "{rule:?} {x:?}: {got:?} against {d:?}"
+            );
+            assert_eq!(got.max_albedo.to_bits(), whole.max_albedo.to_bits());
+            differs |= got.clamped_values != whole.clamped_values;
+        }
+    }
+    assert!(
+        differs,
+        "the subsample gave every figure of the whole table: it tests nothing"
+    );
 }
 
 #[test]

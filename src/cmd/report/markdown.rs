@@ -66,7 +66,7 @@ pub fn write(
     leave_one_out(w, plan, r)?;
     fits(w, r)?;
     maps(w, plan, r)?;
-    super::plausible::markdown(w, r, plan.plausibility_grid)?;
+    super::plausible::markdown(w, r, plan)?;
     precision(w, r)?;
     super::growth::markdown(w, r)?;
     super::analytic::markdown(w, r)?;
@@ -132,7 +132,7 @@ fn leave_one_out(w: &mut dyn Write, plan: &Plan, r: &Results) -> io::Result<()> 
         r.scored_rows,
         r.d,
         if plan.eighth {
-            ", on every 8th phi_d bin (`--quick`)"
+            ", on every 8th phi_d bin (`--quick`; the plausible rule's held-out steps judge their clamp budgets on the same bins)"
         } else {
             ""
         },

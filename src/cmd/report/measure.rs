@@ -7,7 +7,7 @@
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use brdf_atlas_core::loo::{self, Evaluation, Every};
+use brdf_atlas_core::loo::{self, Evaluation};
 use brdf_atlas_core::{
     Dataset, Fit, GplvmParams, GramData, Model, ModelFile, NoProgress, OptimizerKind, Precision,
     Store, StoreRef, TransformKind, build_store,
@@ -92,31 +92,13 @@ pub fn measure(
             "plausibility at {0} x {0} points of the map, each model, every blend rule",
             plan.plausibility_grid
         ))?;
-        super::plausible::measure(
-            log_model,
-            TransformKind::Log,
-            "fixed",
-            plan.plausibility_grid,
-            r,
-        )?;
+        super::plausible::measure(log_model, TransformKind::Log, "fixed", plan, r)?;
         if let Some(lf) = &log.learned {
             let learned =
                 in_memory_model(work, "log-learned", data, lf, &log.store, &log.y, &log.gram)?;
-            super::plausible::measure(
-                &learned,
-                TransformKind::Log,
-                "learned",
-                plan.plausibility_grid,
-                r,
-            )?;
+            super::plausible::measure(&learned, TransformKind::Log, "learned", plan, r)?;
         }
-        super::plausible::measure(
-            raw_model,
-            TransformKind::Raw,
-            "fixed",
-            plan.plausibility_grid,
-            r,
-        )?;
+        super::plausible::measure(raw_model, TransformKind::Raw, "fixed", plan, r)?;
     }
     Ok(())
 }
@@ -219,6 +201,7 @@ fn per_transform(
             predictors[*at].as_ref(),
             convex.as_ref(),
             &[loo::CLAMP_BUDGET],
+            plan.every(),
             &bars,
         )?;
         predictors.push(convex);
@@ -267,12 +250,7 @@ fn per_transform(
     ))?;
     let bars = Bars::new("leave-one-out");
     let t = Instant::now();
-    let every = if plan.eighth {
-        Every::EIGHTH
-    } else {
-        Every::BIN
-    };
-    let ev = loo::evaluate_some(&store, &predictors, &mixes, None, every, &bars)?;
+    let ev = loo::evaluate_some(&store, &predictors, &mixes, None, plan.every(), &bars)?;
     r.loo_times.push((transform, predictors.len(), t.elapsed()));
     drop(bars);
     record_loo(r, transform, &labels, &ev, y.as_ref())?;

@@ -67,7 +67,8 @@ pub struct Args {
     #[arg(long, help = plan::q_max_help(), value_parser = clap::value_parser!(u32).range(1..=MAX_Q as i64))]
     pub q_max: Option<u32>,
     /// Fewer settings (sample counts, map sizes, steps, a 2 x 2 plausibility
-    /// grid, leave-one-out errors on every 8th phi_d bin): a report in
+    /// grid, leave-one-out errors, the plausible rule's held-out steps and
+    /// the grid's clamped shares on every 8th phi_d bin): a report in
     /// seconds on small data. It leaves the prepared map out unless
     /// --prepare is given.
     #[arg(long, conflicts_with = "thorough")]

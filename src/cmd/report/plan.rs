@@ -4,6 +4,7 @@
 use std::time::Duration;
 
 use brdf_atlas_core::OptimizerKind;
+use brdf_atlas_core::loo::Every;
 
 use super::Args;
 
@@ -44,7 +45,8 @@ pub struct Plan {
     pub plausibility_grid: usize,
     /// Measure the prepared map (its lattice takes minutes to build).
     pub prepare: bool,
-    /// Score the leave-one-out passes on every 8th phi_d bin only.
+    /// Judge the leave-one-out passes, the plausible rule's held-out steps
+    /// and the plausibility grid on every 8th phi_d bin only.
     pub eighth: bool,
 }
 
@@ -107,6 +109,16 @@ impl Plan {
             plausibility_grid: PLAUSIBILITY_GRID[1 + usize::from(args.thorough)],
             prepare: args.prepare || args.thorough,
             eighth: false,
+        }
+    }
+
+    /// The bins the leave-one-out passes, the plausible rule's held-out
+    /// steps and the plausibility grid are judged on.
+    pub fn every(&self) -> Every {
+        if self.eighth {
+            Every::EIGHTH
+        } else {
+            Every::BIN
         }
     }
 

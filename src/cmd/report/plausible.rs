@@ -9,6 +9,7 @@ use std::path::Path;
 use brdf_atlas_core::{BlendRule, Model, TransformKind, View};
 
 use super::csv::e;
+use super::plan::Plan;
 use super::results::{PlausibilityRow, Results};
 use super::write_file;
 use crate::error::Error;
@@ -19,7 +20,8 @@ fn quantile(sorted: &[f64], p: f64) -> f64 {
 }
 
 /// The section of report.md.
-pub fn markdown(w: &mut dyn Write, r: &Results, grid: usize) -> io::Result<()> {
+pub fn markdown(w: &mut dyn Write, r: &Results, plan: &Plan) -> io::Result<()> {
+    let grid = plan.plausibility_grid;
     if r.plausibility.is_empty() {
         return Ok(());
     }
@@ -42,7 +44,14 @@ pub fn markdown(w: &mut dyn Write, r: &Results, grid: usize) -> io::Result<()> {
          that the clamp to >= 0 removes. **Albedo**: the largest directional albedo \
          (at most 1 for a physical material). **Low confidence**: predictive variance \
          above 0.5. The picture shows the clamped share per grid cell (log scale, white \
-         at 0.001% and below, black at 10% and above).\n"
+         at 0.001% and below, black at 10% and above).{}\n",
+        if plan.eighth {
+            " With `--quick` the clamped shares are summed over every 8th phi_d bin \
+             (each kept bin weighted as every bin is otherwise); the largest albedo and \
+             the plausible rule's steps are the model's own."
+        } else {
+            ""
+        }
     )?;
     writeln!(
         w,
@@ -189,15 +198,16 @@ fn grid_points(grid: usize) -> Vec<[f64; 2]> {
         .collect()
 }
 
-/// `model` (of `transform`) at the grid's points under every blend rule.
+/// `model` (of `transform`) at the grid's points under every blend rule,
+/// the clamp's figures on the plan's bins.
 pub fn measure(
     model: &Model,
     transform: TransformKind,
     kernel: &'static str,
-    grid: usize,
+    plan: &Plan,
     r: &mut Results,
 ) -> Result<(), Error> {
-    let points = grid_points(grid);
+    let (points, every) = (grid_points(plan.plausibility_grid), plan.every());
     // The predictive variance depends on the point, not on the rule.
     let variance = points
         .iter()
@@ -206,8 +216,8 @@ pub fn measure(
     // The soft floor's and the GP's figures of every point from one pass
     // over the store, the plausible rule's from its own (its steps from one
     // pass, then one more for all the points).
-    let (gp, floor) = model.plausibilities_gp_and_floor(&points)?;
-    let plausible = model.plausibilities(&points, BlendRule::Plausible)?;
+    let (gp, floor) = model.plausibilities_gp_and_floor(&points, every)?;
+    let plausible = model.plausibilities(&points, BlendRule::Plausible, every)?;
     for (rule, figures) in RULES.into_iter().zip([floor, gp, plausible]) {
         for ((&x, p), &variance) in points.iter().zip(figures).zip(&variance) {
             r.plausibility.push(PlausibilityRow {

@@ -5,9 +5,11 @@
 //! fused multiply-adds, starting from zero. The AVX-512 path computes tiles
 //! of 16 rows x 4 columns in registers, the AVX2 path (and AVX-512's last
 //! rows) tiles of 8 rows x 4 columns (two loads of `A` and four broadcasts
-//! of `B` per eight or sixteen fused multiply-adds); the edges and the
-//! portable path (`f64::mul_add`) do the same operations per output, so
-//! the bits do not depend on the CPU.
+//! of `B` per eight or sixteen fused multiply-adds), and the last rows
+//! (fewer than 8, all of them for a few latent points) blocks of 8 columns
+//! from a transposed copy of `B`; the edges and the portable path
+//! (`f64::mul_add`) do the same operations per output, so the bits do not
+//! depend on the CPU.
 
 /// Columns of `c` per parallel task (a multiple of the tile's 4, so a
 /// column is a tile's or an edge's whatever the split).
@@ -60,26 +62,33 @@ fn columns(c: &mut [f64], a: &[f64], b: &[f64], k: usize) {
         };
         // SAFETY: the CPU has AVX2 and FMA (checked above).
         unsafe { tiles_avx2(c, a, b, (m, k, p), m16) };
+        // The last rows (fewer than 8: all of them for a few points) in
+        // blocks of 8 columns. SAFETY: as above.
+        let p8 = if m8 < m {
+            unsafe { narrow_avx2(c, a, b, (m, k, p), m8) }
+        } else {
+            p4
+        };
         // The edges with the FMA instruction (`mul_add` is a libm call in a
         // build without it). SAFETY: as above.
-        unsafe { edges_fma(c, a, b, (m, k, p), (m8, p4)) };
+        unsafe { edges_fma(c, a, b, (m, k, p), (m8, p8.min(p4), p4)) };
         return;
     }
     // Without the vector paths no tile covers anything: every output is an edge.
-    edges(c, a, b, (m, k, p), (0, 0));
+    edges(c, a, b, (m, k, p), (0, 0, 0));
 }
 
-/// The outputs no tile covers (the last rows of every column, then the
-/// last columns), one at a time.
+/// The outputs no tile covers, one at a time: the last rows (from `m8`)
+/// of columns `from..p4`, then every row of the last columns (from `p4`).
 #[inline(always)]
 fn edges(
     c: &mut [f64],
     a: &[f64],
     b: &[f64],
     (m, k, p): (usize, usize, usize),
-    (m8, p4): (usize, usize),
+    (m8, from, p4): (usize, usize, usize),
 ) {
-    for col in 0..p4 {
+    for col in from..p4 {
         for r in m8..m {
             c[col * m + r] = one(a, b, (m, k), r, col);
         }
@@ -99,9 +108,90 @@ fn edges_fma(
     a: &[f64],
     b: &[f64],
     shape: (usize, usize, usize),
-    split: (usize, usize),
+    split: (usize, usize, usize),
 ) {
     edges(c, a, b, shape, split);
+}
+
+/// Rows `m8..m` (fewer than 8) of the first `p / 8 * 8` columns, in
+/// blocks of 8 columns and groups of up to 4 rows; gives back the columns
+/// covered. Each block of `B` is transposed once into a `k x 8` buffer, so
+/// an output's chain (fused multiply-adds in `k` order from zero) is the
+/// same as everywhere else while 8 of them advance per instruction pair.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn narrow_avx2(
+    c: &mut [f64],
+    a: &[f64],
+    b: &[f64],
+    (m, k, p): (usize, usize, usize),
+    m8: usize,
+) -> usize {
+    let p8 = p / 8 * 8;
+    assert!(a.len() == m * k && b.len() == k * p && c.len() == m * p && m8 <= m);
+    let mut bt = vec![0.0f64; 8 * k];
+    for c0 in (0..p8).step_by(8) {
+        for j in 0..8 {
+            for (t, &v) in b[(c0 + j) * k..(c0 + j + 1) * k].iter().enumerate() {
+                bt[8 * t + j] = v;
+            }
+        }
+        let mut r = m8;
+        while r < m {
+            let rows = (m - r).min(4);
+            match rows {
+                4 => narrow_group::<4>(c, a, &bt, (m, k), r, c0),
+                3 => narrow_group::<3>(c, a, &bt, (m, k), r, c0),
+                2 => narrow_group::<2>(c, a, &bt, (m, k), r, c0),
+                _ => narrow_group::<1>(c, a, &bt, (m, k), r, c0),
+            }
+            r += rows;
+        }
+    }
+    p8
+}
+
+/// `R` rows from `r0` of the 8 columns from `c0`, from the transposed
+/// block `bt` (`k x 8`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn narrow_group<const R: usize>(
+    c: &mut [f64],
+    a: &[f64],
+    bt: &[f64],
+    (m, k): (usize, usize),
+    r0: usize,
+    c0: usize,
+) {
+    use std::arch::x86_64::*;
+    assert!(r0 + R <= m && a.len() == m * k && bt.len() == 8 * k && c.len() >= (c0 + 8) * m);
+    let (ap, bp) = (a.as_ptr(), bt.as_ptr());
+    let mut lo = [_mm256_setzero_pd(); R];
+    let mut hi = [_mm256_setzero_pd(); R];
+    for t in 0..k {
+        // SAFETY: t < k and r0 + R <= m, so 8 t + 8 <= bt.len() and
+        // t m + r0 + i < a.len(), asserted above.
+        unsafe {
+            let y0 = _mm256_loadu_pd(bp.add(8 * t));
+            let y1 = _mm256_loadu_pd(bp.add(8 * t + 4));
+            for i in 0..R {
+                let x = _mm256_broadcast_sd(&*ap.add(t * m + r0 + i));
+                lo[i] = _mm256_fmadd_pd(x, y0, lo[i]);
+                hi[i] = _mm256_fmadd_pd(x, y1, hi[i]);
+            }
+        }
+    }
+    let mut out = [0.0f64; 8];
+    for i in 0..R {
+        // SAFETY: `out` holds 8 values.
+        unsafe {
+            _mm256_storeu_pd(out.as_mut_ptr(), lo[i]);
+            _mm256_storeu_pd(out.as_mut_ptr().add(4), hi[i]);
+        }
+        for (j, &v) in out.iter().enumerate() {
+            c[(c0 + j) * m + r0 + i] = v;
+        }
+    }
 }
 
 /// One output the portable way.
@@ -201,6 +291,14 @@ mod tests {
         for (m, k, p) in [
             (1, 1, 1),
             (8, 3, 4),
+            // Fewer than 8 rows: blocks of 8 columns, groups of 4, 3, 2, 1
+            // rows, and the columns after the last block.
+            (1, 16, 19),
+            (2, 5, 8),
+            (3, 16, 35),
+            (4, 16, 64),
+            (7, 9, 17),
+            (15, 16, 27),
             (13, 7, 9),
             (300, 100, 37),
             // Split between threads: several blocks of columns and an edge.

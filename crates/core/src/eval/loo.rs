@@ -46,11 +46,11 @@ use crate::simd::fold::{GROUPS, ordered_blocks_then};
 /// Rows of the store per block of the LOO pass.
 const BLOCK: usize = 1024;
 
-pub use super::every::Every;
 pub use super::nonneg::{banded_steps, convex_predictor, plausible_predictors};
 pub use super::predictors::{discarded, gp_predictor, pca_in_sample_predictor, pca_predictor};
 pub use super::projected::{capped_simplex, projected_predictor};
 pub use crate::query::budget::{CLAMP_BUDGET, CONVEX_LENGTH_RATIO, STEPS};
+pub use crate::query::every::Every;
 
 /// Squared errors of one predictor, per material.
 #[derive(Debug, Clone, PartialEq)]
@@ -119,13 +119,11 @@ pub struct Evaluation {
 /// `cos_i cos_o` of each bin and whether the log transform treats it as grazing.
 fn cosines(dims: Dims) -> (Vec<f64>, Vec<bool>) {
     let log = TransformKind::Log.build(dims);
-    (0..dims.bins())
-        .map(|b| {
-            let (ci, co) = dims.angles_of(b).cosines();
-            let grazing = matches!(log.inverse_form(b), InverseForm::Exp(s) if s == 0.0);
-            ((ci * co).max(0.0), grazing)
-        })
-        .unzip()
+    let cos = crate::data::transform::cosine_products(dims);
+    let grazing = (0..dims.bins())
+        .map(|b| matches!(log.inverse_form(b), InverseForm::Exp(s) if s == 0.0))
+        .collect();
+    (cos, grazing)
 }
 
 /// Apply every predictor to every row of `store` and sum the squared errors

@@ -2,7 +2,6 @@
 //! material comes back at its own point.
 
 mod albedo_floor;
-mod every;
 pub mod fidelity;
 pub mod loo;
 mod nonneg;

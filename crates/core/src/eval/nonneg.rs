@@ -20,6 +20,7 @@ use crate::error::{ParamError, Result};
 use crate::gplvm::kernel::{Kernel, rows_of};
 use crate::progress::Progress;
 use crate::query::budget::{Budget, STEPS, convex_weights, counted};
+use crate::query::every::Every;
 use crate::simd::fold::{GROUPS, ordered_blocks_then};
 
 /// Rows of the store per block of the pass.
@@ -63,7 +64,7 @@ pub fn plausible_predictors(
     budgets: &[f64],
     progress: &dyn Progress,
 ) -> Result<Vec<(Mat<f64>, Vec<f64>)>> {
-    let budget = budget_pass(store, gp, convex, false, progress)?;
+    let budget = budget_pass(store, gp, convex, false, Every::BIN, progress)?;
     let n = store.n();
     Ok(budgets
         .iter()
@@ -85,15 +86,19 @@ pub fn plausible_predictors(
 /// bin's step is raised to the albedo floor where the prediction's largest
 /// directional albedo is above 1 (as [`crate::BlendRule::Plausible`] does). Steps are
 /// laid out bin by bin (`steps[band * N + i]`), to be mixed by
-/// [`crate::loo::Mix`].
+/// [`crate::loo::Mix`]. The budgets are judged on the bins `every` keeps
+/// (each kept bin weighted by its cosines, as every bin is with
+/// [`Every::BIN`]); the albedo floor always reads the directional rule's
+/// rows.
 pub fn banded_steps(
     store: &Store,
     gp: MatRef<'_, f64>,
     convex: MatRef<'_, f64>,
     budgets: &[f64],
+    every: Every,
     progress: &dyn Progress,
 ) -> Result<Vec<Vec<f64>>> {
-    let budget = budget_pass(store, gp, convex, true, progress)?;
+    let budget = budget_pass(store, gp, convex, true, every, progress)?;
     let stacked = stack(gp, convex);
     budgets
         .iter()
@@ -123,12 +128,13 @@ fn stack(gp: MatRef<'_, f64>, convex: MatRef<'_, f64>) -> Vec<f64> {
 
 /// One pass over the store: the clamp budget of every step for the GP and
 /// convex leave-one-out predictions of every material, over the whole table
-/// or per `theta_h` bin.
+/// or per `theta_h` bin, on the rows `every` keeps.
 fn budget_pass(
     store: &Store,
     gp: MatRef<'_, f64>,
     convex: MatRef<'_, f64>,
     banded: bool,
+    every: Every,
     progress: &dyn Progress,
 ) -> Result<Budget> {
     let n = store.n();
@@ -160,9 +166,11 @@ fn budget_pass(
     // the bits do not depend on the thread count).
     let partial_bytes = n * bands * 2 * STEPS.len() * std::mem::size_of::<f64>();
     let groups = (PARTIALS_BUDGET / partial_bytes.max(1)).clamp(1, GROUPS);
-    progress.start("plausible steps", store.rows() as u64);
+    let kept = every.rows(dims, store.rows());
+    let passed = kept.as_ref().map_or(store.rows(), Vec::len);
+    progress.start("plausible steps", passed as u64);
     let parts = ordered_blocks_then(
-        store.rows(),
+        passed,
         BLOCK,
         groups,
         || {
@@ -175,17 +183,23 @@ fn budget_pass(
         |(budget, zbuf, out), range| {
             let (r0, r1, len) = (range.start, range.end, range.len());
             let z = &mut zbuf[..len * n];
-            match store.z() {
-                Rows::F32(s) => z
+            let ids = kept.as_ref().map(|k| &k[range]);
+            match (ids, store.z()) {
+                (Some(ids), _) => {
+                    for (o, &r) in z.chunks_exact_mut(n).zip(ids) {
+                        store.copy_rows(r as usize, o);
+                    }
+                }
+                (None, Rows::F32(s)) => z
                     .iter_mut()
                     .zip(&s[r0 * n..r1 * n])
                     .for_each(|(o, v)| *o = *v as f64),
-                Rows::F64(s) => z.copy_from_slice(&s[r0 * n..r1 * n]),
+                (None, Rows::F64(s)) => z.copy_from_slice(&s[r0 * n..r1 * n]),
             }
             // Bin-major rows are the columns of an n x len matrix.
             matmul(&mut out[..len * 2 * n], &stacked, z, n);
             for k in 0..len {
-                let row = r0 + k;
+                let row = ids.map_or(r0 + k, |ids| ids[k] as usize);
                 let Some(form) = counted(store, transform.as_ref(), row) else {
                     continue;
                 };

@@ -5,6 +5,7 @@
 pub(crate) mod budget;
 pub mod contour;
 mod decor;
+pub(crate) mod every;
 mod exact;
 pub mod field;
 pub mod floor;

@@ -15,6 +15,7 @@ use rayon::prelude::*;
 use crate::dense::product::matmul;
 use crate::error::Result;
 use crate::model::Model;
+use crate::query::every::Every;
 use crate::query::exact::{PassWeights, floor_of};
 use crate::query::floor::{floor_points, top_of};
 use crate::query::plausibility::{BlendRule, ClampSums, Plausibility};
@@ -33,17 +34,22 @@ impl Model {
     /// the points' figures (in each `theta_h` bin a blend's weights are
     /// fixed, so that pass is a product with them too). The
     /// sums run in a fixed order: the answer does not depend on the thread
-    /// count, and equals the one-point figures to rounding.
+    /// count, and equals the one-point figures to rounding. The clamp's
+    /// figures are summed over the bins `every` keeps ([`Every::BIN`] for
+    /// the one-point figures; a subsample such as [`Every::EIGHTH`] for a
+    /// cheaper estimate of the same shares); the plausible rule's steps
+    /// and the largest albedo are the model's whatever `every`.
     pub fn plausibilities(
         &self,
         points: &[[f64; 2]],
         rule: BlendRule,
+        every: Every,
     ) -> Result<Vec<Plausibility>> {
         if rule == BlendRule::Plausible {
             let points: Vec<Vec<f64>> = points.iter().map(|p| p.to_vec()).collect();
             let blends = self.plausible_blends(&points)?;
             self.store().verify_cheap()?;
-            let sums = self.banded_clamp_sums(&blends);
+            let sums = self.banded_clamp_sums(&blends, every);
             let blends: Vec<&Blend<'_>> = blends.iter().collect();
             let out = sums
                 .iter()
@@ -54,7 +60,7 @@ impl Model {
             return Ok(out);
         }
         let floor = floor_of(rule)?;
-        let (gp, floored) = self.clamp_pass(points, !floor, floor)?;
+        let (gp, floored) = self.clamp_pass(points, !floor, floor, every)?;
         let sums = if floor { floored } else { gp };
         self.figures_of(points, rule, &sums)
     }
@@ -65,8 +71,9 @@ impl Model {
     pub fn plausibilities_gp_and_floor(
         &self,
         points: &[[f64; 2]],
+        every: Every,
     ) -> Result<(Vec<Plausibility>, Vec<Plausibility>)> {
-        let (gp, floored) = self.clamp_pass(points, true, true)?;
+        let (gp, floored) = self.clamp_pass(points, true, true, every)?;
         Ok((
             self.figures_of(points, BlendRule::Gp, &gp)?,
             self.figures_of(points, BlendRule::Floor, &floored)?,
@@ -97,12 +104,13 @@ impl Model {
 
     /// The clamp's sums at each of `points` of the GP's blend (if `gp`) and
     /// of the soft floor (if `floor`; else empty), from one pass over the
-    /// store.
+    /// rows of the store that `every` keeps.
     fn clamp_pass(
         &self,
         points: &[[f64; 2]],
         gp: bool,
         floor: bool,
+        every: Every,
     ) -> Result<(Vec<ClampSums>, Vec<ClampSums>)> {
         self.store().verify_cheap()?;
         let m = points.len();
@@ -120,8 +128,10 @@ impl Model {
         let cosines = self.cosine_products();
         let transform = self.transform();
         let (gm, fm) = (if gp { m } else { 0 }, if floor { m } else { 0 });
+        let kept = every.rows(self.dims(), store.rows());
+        let passed = kept.as_ref().map_or(store.rows(), Vec::len);
         let parts = ordered_blocks(
-            store.rows(),
+            passed,
             BLOCK,
             GROUPS,
             || {
@@ -132,8 +142,9 @@ impl Model {
             },
             |(gacc, facc), range| {
                 let len = range.len();
+                let listed = kept.as_ref().map(|k| &k[range.clone()]);
                 let mut z = vec![0.0f64; n * len];
-                store.copy_rows(range.start, &mut z);
+                store.copy_listed(range.start, listed, &mut z);
                 let mut t = vec![0.0f64; m * len];
                 matmul(&mut t, &a, &z, n);
                 let mut v = Vec::new();
@@ -141,7 +152,8 @@ impl Model {
                     v.resize(m * len, 0.0);
                     matmul(&mut v, &av, &z, n);
                 }
-                for (k, row) in range.enumerate() {
+                for k in 0..len {
+                    let row = listed.map_or(range.start + k, |l| l[k] as usize);
                     if unmeasured[row] != 0 {
                         continue;
                     }
@@ -177,8 +189,9 @@ impl Model {
     /// pass over the store: in the rows of one `theta_h` bin of one channel
     /// every blend's weights are fixed, so a block of them is one product
     /// with the blends' weights. One task a bin and channel, merged in
-    /// order: the sums do not depend on the thread count.
-    fn banded_clamp_sums(&self, blends: &[Blend<'_>]) -> Vec<ClampSums> {
+    /// order: the sums do not depend on the thread count. Only the rows
+    /// `every` keeps are read.
+    fn banded_clamp_sums(&self, blends: &[Blend<'_>], every: Every) -> Vec<ClampSums> {
         let m = blends.len();
         let store = self.store();
         let (n, dims) = (store.n(), self.dims());
@@ -198,13 +211,23 @@ impl Model {
                     .collect();
                 let mut acc = vec![ClampSums::default(); m];
                 let (mut z, mut t) = (Vec::new(), Vec::new());
-                for r0 in (start..start + per).step_by(BLOCK) {
-                    let len = BLOCK.min(start + per - r0);
+                // The band's kept rows (none listed when all are kept).
+                let kept: Option<Vec<u32>> = (!every.keeps_every_bin()).then(|| {
+                    (start..start + per)
+                        .filter(|&r| every.keeps(dims, r % bins))
+                        .map(|r| r as u32)
+                        .collect()
+                });
+                let count = kept.as_ref().map_or(per, Vec::len);
+                for from in (0..count).step_by(BLOCK) {
+                    let len = BLOCK.min(count - from);
+                    let listed = kept.as_ref().map(|k| &k[from..from + len]);
                     z.resize(n * len, 0.0);
                     t.resize(m * len, 0.0);
-                    store.copy_rows(r0, &mut z);
+                    store.copy_listed(start + from, listed, &mut z);
                     matmul(&mut t, &a, &z, n);
-                    for (k, row) in (r0..r0 + len).enumerate() {
+                    for k in 0..len {
+                        let row = listed.map_or(start + from + k, |l| l[k] as usize);
                         if unmeasured[row] != 0 {
                             continue;
                         }

@@ -369,6 +369,20 @@ impl Store {
         }
     }
 
+    /// Copy rows `r0..` into `out` as f64 (`None`), or the listed rows,
+    /// one after another (`Some`): `out.len() / n` of them either way.
+    pub(crate) fn copy_listed(&self, r0: usize, listed: Option<&[u32]>, out: &mut [f64]) {
+        match listed {
+            None => self.copy_rows(r0, out),
+            Some(rows) => {
+                let n = self.layout.n;
+                for (o, &r) in out.chunks_exact_mut(n).zip(rows) {
+                    self.copy_rows(r as usize, o);
+                }
+            }
+        }
+    }
+
     /// `Y = Z Z^T` from the stored values, with the kernel of the pass that
     /// built the store (f32 lanes within a block for an f32 store, see
     /// [`crate::dense::gram32`]; f64 throughout for an f64 one; the blocks'

@@ -52,7 +52,12 @@ impl Every {
         (start + step.max(1) / 2).min(len - 1)
     }
 
-    fn keeps(self, dims: Dims, bin: usize) -> bool {
+    /// Whether every bin is kept (a step of at most 1 both ways).
+    pub(crate) fn keeps_every_bin(self) -> bool {
+        self.theta_d <= 1 && self.phi_d <= 1
+    }
+
+    pub(crate) fn keeps(self, dims: Dims, bin: usize) -> bool {
         let (_, id, ip) = dims.unbin(bin);
         let keep = |i: usize, step: usize, len: usize| {
             i == Every::kept_in(Every::cell(i, step), step, len)
@@ -61,8 +66,8 @@ impl Every {
     }
 
     /// The kept rows (all channels), or `None` when every row is kept.
-    pub(super) fn rows(self, dims: Dims, rows: usize) -> Option<Vec<u32>> {
-        if self.theta_d <= 1 && self.phi_d <= 1 {
+    pub(crate) fn rows(self, dims: Dims, rows: usize) -> Option<Vec<u32>> {
+        if self.keeps_every_bin() {
             return None;
         }
         let bins = dims.bins();
@@ -77,7 +82,7 @@ impl Every {
     /// The dense albedo rule ([`Quadrature::dense`], 2 sub-cells a bin, the
     /// rule the model's exact albedo uses) as a weight per bin, each bin's
     /// weight gathered onto the kept bin of its cell.
-    pub(super) fn weights(self, dims: Dims) -> Vec<f64> {
+    pub(crate) fn weights(self, dims: Dims) -> Vec<f64> {
         let rule = Quadrature::dense(dims, 2);
         let mut w = vec![0.0; dims.bins()];
         for (&bin, &wb) in rule.bins().iter().zip(rule.weights()) {
