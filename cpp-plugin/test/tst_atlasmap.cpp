@@ -552,7 +552,7 @@ private slots:
         const QString status = panel_->statusLabel()->text();
         qInfo("export: %s", qPrintable(status));
         auto n = [](double v) { return QString::number(v, 'f', 3); };
-        QVERIFY2(status.contains(atlasAnalyticText(want)) && status.contains(e.stem + ".glb") &&
+        QVERIFY2(status.contains(atlasAnalyticText(want)) && status.contains(e.stem + ".{glb,mtlx,mitsuba.json,fit.json}") &&
                      status.contains(QStringLiteral("base colour (%1, %2, %3)")
                                          .arg(n(want.base_color[0]), n(want.base_color[1]), n(want.base_color[2]))) &&
                      status.contains("roughness " + n(want.roughness)) && status.contains("ior " + n(want.ior)) &&

@@ -67,6 +67,7 @@ bool AtlasPanel::saveTo(const QString &path) {
         return false;
     }
     status_->setStyleSheet(QString());
+    status_->setToolTip(QString());
     status_->setText(QStringLiteral("saved %1").arg(path));
     return true;
 }

@@ -155,6 +155,7 @@ AtlasPanel::AtlasPanel(QWidget *parent)
         showPlausibility();
         save_->setEnabled(true);
         status_->setStyleSheet(QString());
+        status_->setToolTip(QString());
         status_->setText(QStringLiteral("%1: reconstructed%2 in %3 s")
                              .arg(b.r.name)
                              .arg(atlasBlendChoice(b.r.blend).said)
@@ -171,9 +172,11 @@ AtlasPanel::AtlasPanel(QWidget *parent)
         }
         exported_ = e;
         status_->setStyleSheet(QString());
-        status_->setText(QStringLiteral("%1 Wrote %2.glb, .mtlx, .mitsuba.json and .fit.json in %3 (%4 s).")
-                             .arg(atlasAnalyticText(e.parameters), e.stem, QDir::toNativeSeparators(e.dir))
-                             .arg(seconds, 0, 'f', 1));
+        status_->setText(QStringLiteral("%1 Wrote %2.{glb,mtlx,mitsuba.json,fit.json} in %3.")
+                             .arg(atlasAnalyticText(e.parameters), e.stem, QDir::toNativeSeparators(e.dir)));
+        status_->setToolTip(QStringLiteral("%1 Fitted and written in %2 s.")
+                                .arg(atlasAnalyticErrorTip(e.parameters))
+                                .arg(seconds, 0, 'f', 1));
         emit exported(e);
     });
 }
@@ -196,6 +199,7 @@ void AtlasPanel::setBusy(bool busy, const QString &what) {
     progress_->setFormat(what);
     if (busy) {
         status_->setStyleSheet(QString());
+        status_->setToolTip(QString());
         status_->setText(what);
     }
     updateCoordinates();
@@ -203,6 +207,7 @@ void AtlasPanel::setBusy(bool busy, const QString &what) {
 
 void AtlasPanel::fail(const QString &message) {
     status_->setStyleSheet(atlasErrorStyle());
+    status_->setToolTip(QString());
     status_->setText(message);
     emit failed(message);
 }
@@ -215,6 +220,7 @@ void AtlasPanel::sayConfidence() {
         const double v = model->variance(m.x(), m.y());  // no pass over the store
         const brdf_atlas::Model::Marker marker = model->marker(m.x(), m.y());  // nor here
         status_->setStyleSheet(QString());
+        status_->setToolTip(QString());
         if (v > BRDF_ATLAS_LOW_CONFIDENCE_VARIANCE) {
             status_->setText(atlasLowConfidenceText(v));
         } else if (!marker.given_back() && marker.material != SIZE_MAX) {

@@ -43,9 +43,13 @@ QString atlasMarkerText(const QString &name, const brdf_atlas::Model::Marker &ma
 
 /// The analytic fit `a` in words: its glTF parameters (base colour,
 /// metallic, roughness, specular factor and colour, ior) with three decimals,
-/// as `brdf-atlas export` prints them, and its table error beside the two
-/// baselines'.
+/// as `brdf-atlas export` prints them, and its table error: short enough
+/// for the panel's status line in BRDF Explorer.
 QString atlasAnalyticText(const brdf_atlas::Analytic &a);
+
+/// What the table error of `a` measures, with the two baselines' (a
+/// tooltip for the status line).
+QString atlasAnalyticErrorTip(const brdf_atlas::Analytic &a);
 
 /// The colour a label shows `p` in: empty (the palette's) when plausible,
 /// the panel's error red when not.
