@@ -419,6 +419,42 @@ enum BrdfAtlasStatus brdf_atlas_model_fit_analytic(const struct BrdfAtlasModel *
                                                    struct BrdfAtlasAnalytic *out);
 
 /**
+ * Fit the analytic material of latent point (x, y) as
+ * `brdf_atlas_model_fit_analytic` does and write it into the directory
+ * `dir` as `STEM.glb` (glTF 2.0 binary: a sphere with the material),
+ * `STEM.mtlx` (MaterialX, Standard Surface), `STEM.mitsuba.json` (a
+ * Mitsuba 3 `principled` dictionary) and `STEM.fit.json` (the parameters,
+ * the table errors and how they were measured): what `brdf-atlas export
+ * --at X,Y --name STEM` writes but its picture (`STEM.png`), with the
+ * table errors only (the rendered errors are the command-line tool's
+ * comparison). The four are put in place together, atomically: a failed
+ * call leaves none of them; existing files of those names are replaced.
+ * Takes as long as the fit, one to a few seconds: call it off a GUI
+ * thread.
+ *
+ * Ownership: `model`, `dir` and `stem` are borrowed for the call; `out`
+ * (caller-owned) receives the parameters and table errors written to the
+ * files, on success only.
+ *
+ * Returns OK, NULL_ARGUMENT, INVALID_ARGUMENT (x or y NaN or infinite;
+ * `dir` or `stem` empty or not UTF-8; `stem` with a `/` or `\`, or a
+ * leading `.`; a material with too few measured bins to fit), UNSUPPORTED
+ * (the model is not 2-D), IO (`dir` is missing or not a directory; a file
+ * could not be written), BAD_FILE (the store changed on disk while the
+ * model was open).
+ *
+ * # Safety
+ * `model` is NULL or a live handle; `dir` and `stem` are NULL or
+ * NUL-terminated strings; `out` is NULL or valid for writing.
+ */
+enum BrdfAtlasStatus brdf_atlas_model_export(const struct BrdfAtlasModel *model,
+                                             double x,
+                                             double y,
+                                             const char *dir,
+                                             const char *stem,
+                                             struct BrdfAtlasAnalytic *out);
+
+/**
  * `count` luminance levels evenly spaced strictly inside the luminance
  * range (Rec. 709 weights) of a `width` x `height` albedo map laid out as
  * `brdf_atlas_model_albedo_map` writes it: level k (1-based) is

@@ -58,6 +58,7 @@ using View = BrdfAtlasView;
 using Dims = BrdfAtlasDims;
 using Location = BrdfAtlasLocation;
 using Plausibility = BrdfAtlasPlausibility;
+using Analytic = BrdfAtlasAnalytic;
 using Vec3 = std::array<double, 3>;
 static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 arrays must be packed doubles");
 
@@ -303,6 +304,25 @@ public:
         Plausibility p{};
         check(brdf_atlas_model_plausibility(handle_, x, y, blend, &p));
         return p;
+    }
+
+    /// The glTF parameters `brdf-atlas export` fits to the material at
+    /// (x, y), and the fit's table errors. Takes one to a few seconds.
+    Analytic fit_analytic(double x, double y) const {
+        Analytic a{};
+        check(brdf_atlas_model_fit_analytic(handle_, x, y, &a));
+        return a;
+    }
+
+    /// Fit the material at (x, y) as fit_analytic() does and write it into
+    /// the existing directory `dir` as STEM.glb, STEM.mtlx,
+    /// STEM.mitsuba.json and STEM.fit.json (brdf_atlas_model_export); returns
+    /// the parameters written.
+    Analytic export_analytic(double x, double y, const std::string &dir,
+                             const std::string &stem) const {
+        Analytic a{};
+        check(brdf_atlas_model_export(handle_, x, y, dir.c_str(), stem.c_str(), &a));
+        return a;
     }
 
     /// Where the MERL file at `merl_path` lands.

@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use brdf_atlas_analytic::AnalyticError;
 use brdf_atlas_core::CoreError;
 use brdf_merl::MerlError;
 
@@ -58,6 +59,17 @@ pub enum Error {
 impl From<(PathBuf, std::io::Error)> for Error {
     fn from((path, source): (PathBuf, std::io::Error)) -> Self {
         Error::Write { path, source }
+    }
+}
+
+impl From<AnalyticError> for Error {
+    /// A file the export could not write is [`Error::Write`]; anything
+    /// else the analytic crate refuses is input the command cannot use.
+    fn from(e: AnalyticError) -> Self {
+        match e {
+            AnalyticError::Write { path, source } => Error::Write { path, source },
+            e => Error::Input(e.to_string()),
+        }
     }
 }
 

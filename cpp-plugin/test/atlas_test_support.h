@@ -2,7 +2,7 @@
 // the C library's own answers, through handles of the test's own (the
 // reference tables, plausibility and maps the widget is checked against),
 // the checks of the panel's plausibility line and of a map against them,
-// file helpers, and the user's steps that several tests repeat (Validate,
+// file helpers (a glTF binary's JSON among them), and the user's steps that several tests repeat (Validate,
 // choosing a blend rule).
 #ifndef BRDF_ATLAS_TEST_SUPPORT_H
 #define BRDF_ATLAS_TEST_SUPPORT_H
@@ -10,8 +10,11 @@
 #include <QComboBox>
 #include <QFile>
 #include <QImage>
+#include <QJsonDocument>
+#include <QJsonObject>
 #include <QLabel>
 #include <QSignalSpy>
+#include <QtEndian>
 #include <QtTest>
 
 #include <cstring>
@@ -47,6 +50,14 @@ inline QByteArray readAll(const QString &path) {
     QFile f(path);
     if (!f.open(QIODevice::ReadOnly)) qFatal("cannot read %s", qPrintable(path));
     return f.readAll();
+}
+
+// The JSON chunk of a glTF binary (.glb): the first chunk, after the
+// 12-byte header and the chunk's length and type.
+inline QJsonObject glbJson(const QString &path) {
+    const QByteArray glb = readAll(path);
+    if (!glb.startsWith("glTF") || glb.mid(16, 4) != "JSON") qFatal("%s is not a glTF binary", qPrintable(path));
+    return QJsonDocument::fromJson(glb.mid(20, int(qFromLittleEndian<quint32>(glb.constData() + 12)))).object();
 }
 
 // The C library's plausibility at (x, y), through a handle of its own.

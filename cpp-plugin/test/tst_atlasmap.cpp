@@ -4,7 +4,8 @@
 // frames' delays are printed), click, press Validate, wait
 // for the reconstruction off the GUI thread, and check the table against
 // the C library called directly (bit for bit), then save it and compare
-// with the library's own writer byte for byte. Validate makes the default
+// with the library's own writer byte for byte, and export the analytic
+// material there (the parameters shown are the library's fit). Validate makes the default
 // rule's material (the soft floor), or the GP's or the stepped rule's when
 // chosen in the panel, which remembers the choice. Under Validate the panel
 // states the material's plausibility: the numbers of
@@ -25,6 +26,7 @@
 #include <QComboBox>
 #include <QDir>
 #include <QFile>
+#include <QJsonArray>
 #include <QLabel>
 #include <QLayout>
 #include <QProgressBar>
@@ -226,7 +228,7 @@ private slots:
     }
 
     void clickSetsTheMarker() {
-        QVERIFY(!panel_->validateButton()->isEnabled());
+        QVERIFY(!panel_->validateButton()->isEnabled() && !panel_->exportButton()->isEnabled());
         // Between two materials: half-way from the first to the second,
         // brought into view if the zooms and pans before left it outside
         // (with a model of many materials the two may lie far apart).
@@ -248,7 +250,7 @@ private slots:
         QVERIFY2(text.contains(QString::number(expected.x(), 'f', 4)) &&
                      text.contains(QString::number(expected.y(), 'f', 4)),
                  qPrintable(text));
-        QVERIFY(panel_->validateButton()->isEnabled());
+        QVERIFY(panel_->validateButton()->isEnabled() && panel_->exportButton()->isEnabled());
     }
 
     void validateReconstructsOffTheGuiThread() {
@@ -527,6 +529,48 @@ private slots:
         QVERIFY(!panel_->saveTo(dir.filePath("missing/x.binary")));
         QCOMPARE(failed.count(), 1);
         QVERIFY(failed.first().first().toString().contains("missing/x.binary"));
+    }
+
+    void exportWritesTheAnalyticFiles() {
+        // "Export analytic..." past its directory dialog (exportTo, as saveTo
+        // for Save): the fit runs off the GUI thread, the four files appear,
+        // and the parameters the panel states are those that
+        // brdf_atlas_model_fit_analytic, called directly, fits there.
+        QTemporaryDir dir;
+        QVERIFY(dir.isValid());
+        const QPointF m = view_->marker();
+        QSignalSpy exported(panel_, &AtlasPanel::exported);
+        QSignalSpy failed(panel_, &AtlasPanel::failed);
+        panel_->exportTo(dir.path());
+        QVERIFY(panel_->busy() && !panel_->exportButton()->isEnabled() && exported.isEmpty());
+        QTRY_VERIFY_WITH_TIMEOUT(exported.count() + failed.count() > 0, 120000);
+        QVERIFY2(failed.isEmpty(), failed.isEmpty() ? "" : qPrintable(failed.first().first().toString()));
+        const AtlasExport &e = panel_->lastExport();
+        QVERIFY(e.x == m.x() && e.y == m.y() && panel_->exportButton()->isEnabled());
+        const brdf_atlas::Analytic want = brdf_atlas::Model(modelPath_.toStdString()).fit_analytic(m.x(), m.y());
+        QVERIFY(std::memcmp(&e.parameters, &want, sizeof want) == 0);
+        const QString status = panel_->statusLabel()->text();
+        qInfo("export: %s", qPrintable(status));
+        auto n = [](double v) { return QString::number(v, 'f', 3); };
+        QVERIFY2(status.contains(atlasAnalyticText(want)) && status.contains(e.stem + ".{glb,mtlx,mitsuba.json,fit.json}") &&
+                     status.contains(QStringLiteral("base colour (%1, %2, %3)")
+                                         .arg(n(want.base_color[0]), n(want.base_color[1]), n(want.base_color[2]))) &&
+                     status.contains("roughness " + n(want.roughness)) && status.contains("ior " + n(want.ior)) &&
+                     status.contains(QString::number(want.table_error, 'f', 4)),
+                 qPrintable(status));
+        QCOMPARE(e.files.size(), 4);
+        QCOMPARE(QDir(dir.path()).entryList(QDir::Files).size(), 4);
+        for (const QString &f : e.files) QVERIFY2(QFileInfo(f).size() > 0, qPrintable(f));
+        // The glb's JSON chunk names the material and carries its parameters.
+        const QJsonObject material = glbJson(dir.filePath(e.stem + ".glb"))["materials"].toArray()[0].toObject();
+        QCOMPARE(material["name"].toString(), e.stem);
+        QCOMPARE(material["pbrMetallicRoughness"].toObject()["roughnessFactor"].toDouble(), want.roughness);
+        // Into a missing directory: the library's message, in red, naming it.
+        panel_->exportTo(dir.filePath("missing"));
+        QTRY_VERIFY_WITH_TIMEOUT(failed.count() == 1 && !panel_->busy(), 120000);
+        QVERIFY2(failed.first().first().toString().contains("missing: is not a directory"),
+                 qPrintable(failed.first().first().toString()));
+        QVERIFY(panel_->statusLabel()->styleSheet().contains("c03030"));
     }
 
     void lowConfidenceIsFadedAndSaid() {

@@ -1,14 +1,19 @@
-// AtlasFiles.cpp: the panel's files: the MERL writer and the file dialogs
-// (declared in AtlasMapWidget.h).
+// AtlasFiles.cpp: the panel's files: the MERL writer, the analytic export
+// and the file dialogs (declared in AtlasMapWidget.h).
 #include "AtlasMapWidget.h"
 
+#include <QDir>
 #include <QFileDialog>
+#include <QFileInfo>
 #include <QLabel>
+#include <QPushButton>
 #include <QSaveFile>
 #include <QSettings>
+#include <QtConcurrent/QtConcurrentRun>
 #include <QtEndian>
 
 #include <algorithm>
+#include <exception>
 
 bool atlasWriteMerl(const AtlasReconstruction &r, const QString &path, QString *error) {
     auto fail = [&](const QString &why) {
@@ -62,6 +67,42 @@ bool AtlasPanel::saveTo(const QString &path) {
         return false;
     }
     status_->setStyleSheet(QString());
+    status_->setToolTip(QString());
     status_->setText(QStringLiteral("saved %1").arg(path));
     return true;
+}
+
+void AtlasPanel::exportDialog() {
+    if (!view_->model() || !view_->hasMarker()) return;
+    QString start = QSettings(QStringLiteral("brdf-atlas"), QStringLiteral("plugin")).value(exportDirKey()).toString();
+    if (start.isEmpty() || !QFileInfo(start).isDir()) start = QFileInfo(modelPath_).absolutePath();
+    const QString dir = QFileDialog::getExistingDirectory(
+        this, QStringLiteral("Export the analytic material to directory"), start);
+    if (!dir.isEmpty()) exportTo(dir);
+}
+
+void AtlasPanel::exportTo(const QString &dir) {
+    std::shared_ptr<const brdf_atlas::Model> model = view_->model();
+    if (!model || !view_->hasMarker() || exportWatcher_->isRunning()) return;
+    QSettings(QStringLiteral("brdf-atlas"), QStringLiteral("plugin")).setValue(exportDirKey(), dir);
+    AtlasExport e;
+    e.x = view_->marker().x();
+    e.y = view_->marker().y();
+    e.dir = dir;
+    // As `brdf-atlas export --at X,Y` names its files.
+    e.stem = QStringLiteral("at_%1_%2").arg(e.x, 0, 'f', 3).arg(e.y, 0, 'f', 3);
+    exportClock_.start();
+    setBusy(true, QStringLiteral("fitting glTF parameters at (%1, %2)...").arg(e.x, 0, 'f', 4).arg(e.y, 0, 'f', 4));
+    export_->setEnabled(false);
+    exportWatcher_->setFuture(QtConcurrent::run([model, e]() mutable -> AtlasExport {
+        try {
+            e.parameters = model->export_analytic(e.x, e.y, e.dir.toStdString(), e.stem.toStdString());
+            for (const char *ext : {"glb", "mtlx", "mitsuba.json", "fit.json"}) {
+                e.files << QDir(e.dir).filePath(e.stem + QLatin1Char('.') + QLatin1String(ext));
+            }
+        } catch (const std::exception &ex) {
+            e.error = QString::fromUtf8(ex.what());
+        }
+        return e;
+    }));
 }

@@ -9,10 +9,13 @@
 // cursor, dragging pans. AtlasPanel puts the view beside the latent
 // coordinates of the marker, a "Validate" button that reconstructs the
 // material there off the GUI thread (with a busy indicator) under the blend
-// rule chosen above it and says under it how physical that material is, and
-// a "Save .binary..." button. The panel emits `reconstructed` with the whole
-// MERL table; what to do with it (a BRDF in BRDF Explorer's list, a file)
-// is the host's business.
+// rule chosen above it and says under it how physical that material is,
+// a "Save .binary..." button, and "Export analytic..." that fits glTF
+// parameters to the material at the marker off the GUI thread and writes
+// them as glTF, MaterialX and Mitsuba 3 files into a directory
+// (brdf_atlas_model_export), saying the parameters and the fit's error.
+// The panel emits `reconstructed` with the whole MERL table; what to do
+// with it (a BRDF in BRDF Explorer's list, a file) is the host's business.
 //
 // Depends on Qt5Widgets, Qt5Concurrent and the brdf-atlas C library
 // (brdf_atlas.h / brdf_atlas.hpp); nothing of BRDF Explorer.
@@ -63,6 +66,23 @@ struct AtlasReconstruction {
     brdf_atlas::Plausibility plausibility{};
 };
 Q_DECLARE_METATYPE(AtlasReconstruction)
+
+/// An analytic material exported at a latent point: what `AtlasPanel`
+/// hands out after "Export analytic...".
+struct AtlasExport {
+    /// Latent point.
+    double x = 0, y = 0;
+    /// The directory written into and the files' stem ("at_X_Y", as
+    /// `brdf-atlas export --at X,Y` names them).
+    QString dir, stem;
+    /// The files written: STEM.glb, .mtlx, .mitsuba.json and .fit.json.
+    QStringList files;
+    /// The fitted parameters and table errors, as in the files.
+    brdf_atlas::Analytic parameters{};
+    /// The library's message where the export failed, else empty.
+    QString error;
+};
+Q_DECLARE_METATYPE(AtlasExport)
 
 /// Write `r` as a MERL .binary file at `path`, atomically (QSaveFile). On
 /// failure returns false and sets `*error` to one line naming the file.
@@ -229,6 +249,8 @@ public:
     AtlasMapView *mapView() const { return view_; }
     QPushButton *validateButton() const { return validate_; }
     QPushButton *saveButton() const { return save_; }
+    /// "Export analytic...": enabled while a point is picked.
+    QPushButton *exportButton() const { return export_; }
     /// The blend rule Validate makes the material with: "Soft floor"
     /// (BRDF_ATLAS_BLEND_FLOOR, the default), "GP" (BRDF_ATLAS_BLEND_GP) or
     /// "Stepped" (BRDF_ATLAS_BLEND_PLAUSIBLE); each item's data is its rule.
@@ -245,10 +267,12 @@ public:
 
     /// The model file shown ("" before one is open).
     QString modelPath() const { return modelPath_; }
-    /// Whether a model open or a reconstruction is running.
+    /// Whether a model open, a reconstruction or an export is running.
     bool busy() const;
     /// The last reconstruction (table null before the first).
     const AtlasReconstruction &lastReconstruction() const { return last_; }
+    /// The last export that succeeded (no files before the first).
+    const AtlasExport &lastExport() const { return exported_; }
 
     /// The QSettings key of the last model opened (organisation and
     /// application names are the host's).
@@ -256,6 +280,8 @@ public:
     /// Settings key of the blend rule chosen: "floor", "gp" or "plausible"
     /// (the CLI's --blend names); anything else is read as "floor".
     static QString blendKey() { return QStringLiteral("brdf-atlas/blend"); }
+    /// Settings key of the directory exported into last.
+    static QString exportDirKey() { return QStringLiteral("brdf-atlas/exportDir"); }
 
 public slots:
     /// Open a model file off the GUI thread (checks the store); emits
@@ -270,10 +296,19 @@ public slots:
     void saveDialog();
     /// Save the last reconstruction as a MERL .binary file at `path`.
     bool saveTo(const QString &path);
+    /// Ask for a directory (starting at the last one) and export the
+    /// analytic material at the marker into it.
+    void exportDialog();
+    /// Fit the analytic material at the marker (the default rule's, the
+    /// soft floor's, whatever the blend chosen) off the GUI thread and write
+    /// its files into the existing directory `dir`; emits exported or
+    /// failed.
+    void exportTo(const QString &dir);
 
 signals:
     void modelOpened(const QString &path);
     void reconstructed(const AtlasReconstruction &r);
+    void exported(const AtlasExport &e);
     void failed(const QString &message);
 
 protected:
@@ -299,6 +334,7 @@ private:
     QLabel *coords_;
     QPushButton *validate_;
     QPushButton *save_;
+    QPushButton *export_;
     QLabel *blendLabel_;
     QComboBox *blend_;
     QLabel *plausibility_;
@@ -306,7 +342,8 @@ private:
     QLabel *status_;
     QString modelPath_;
     AtlasReconstruction last_;
-    QElapsedTimer clock_;
+    AtlasExport exported_;
+    QElapsedTimer clock_, exportClock_;
 
     struct Opened {
         std::shared_ptr<const brdf_atlas::Model> model;
@@ -319,6 +356,7 @@ private:
     };
     QFutureWatcher<Opened> *openWatcher_;
     QFutureWatcher<Built> *buildWatcher_;
+    QFutureWatcher<AtlasExport> *exportWatcher_;
 };
 
 #endif  // BRDF_ATLAS_MAP_WIDGET_H

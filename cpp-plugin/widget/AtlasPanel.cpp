@@ -1,10 +1,11 @@
 // AtlasPanel.cpp: AtlasPanel, the map view with the marker's coordinates,
-// the blend rule, Validate, the plausibility line and the status line (see
-// AtlasMapWidget.h; its files are in AtlasFiles.cpp).
+// the blend rule, Validate, the plausibility line, Export analytic and the
+// status line (see AtlasMapWidget.h; its files are in AtlasFiles.cpp).
 #include "AtlasMapWidget.h"
 #include "AtlasStatus.h"
 
 #include <QComboBox>
+#include <QDir>
 #include <QEvent>
 #include <QFileInfo>
 #include <QHBoxLayout>
@@ -32,14 +33,17 @@ AtlasPanel::AtlasPanel(QWidget *parent)
       coords_(new QLabel),
       validate_(new QPushButton(QStringLiteral("Validate"))),
       save_(new QPushButton(QStringLiteral("Save .binary..."))),
+      export_(new QPushButton(QStringLiteral("Export analytic..."))),
       blendLabel_(new QLabel(QStringLiteral("Blend:"))),
       blend_(new QComboBox),
       plausibility_(new QLabel),
       progress_(new QProgressBar),
       status_(new QLabel),
       openWatcher_(new QFutureWatcher<Opened>(this)),
-      buildWatcher_(new QFutureWatcher<Built>(this)) {
+      buildWatcher_(new QFutureWatcher<Built>(this)),
+      exportWatcher_(new QFutureWatcher<AtlasExport>(this)) {
     qRegisterMetaType<AtlasReconstruction>();
+    qRegisterMetaType<AtlasExport>();
     setObjectName(QStringLiteral("brdfAtlasPanel"));
     auto *layout = new QVBoxLayout(this);
     layout->setContentsMargins(0, 0, 0, 0);
@@ -77,6 +81,16 @@ AtlasPanel::AtlasPanel(QWidget *parent)
     buttons->addWidget(validate_);
     buttons->addWidget(save_);
     layout->addLayout(buttons);
+    // On a row of its own: beside the others it would widen the panel.
+    auto *files = new QHBoxLayout;
+    export_->setToolTip(
+        QStringLiteral("Fit glTF parameters (base colour, metallic, roughness, specular, ior) to the "
+                       "soft floor's material at the marker and write it as glTF (.glb), MaterialX "
+                       "(.mtlx) and Mitsuba 3 (.mitsuba.json) files with the fit's record (.fit.json) "
+                       "into a directory"));
+    files->addWidget(export_);
+    files->addStretch(1);
+    layout->addLayout(files);
     plausibility_->setWordWrap(true);
     plausibility_->setTextInteractionFlags(Qt::TextSelectableByMouse);
     plausibility_->setToolTip(
@@ -92,6 +106,7 @@ AtlasPanel::AtlasPanel(QWidget *parent)
     layout->addWidget(status_);
     validate_->setEnabled(false);
     save_->setEnabled(false);
+    export_->setEnabled(false);
     updateCoordinates();
     showPlausibility();
 
@@ -102,6 +117,7 @@ AtlasPanel::AtlasPanel(QWidget *parent)
     });
     connect(validate_, &QPushButton::clicked, this, &AtlasPanel::validatePoint);
     connect(save_, &QPushButton::clicked, this, &AtlasPanel::saveDialog);
+    connect(export_, &QPushButton::clicked, this, &AtlasPanel::exportDialog);
     connect(blend_, QOverload<int>::of(&QComboBox::currentIndexChanged), this, [this] {
         const AtlasBlendChoice &c = atlasBlendChoice(blendRule());
         blend_->setToolTip(c.tip);
@@ -139,28 +155,51 @@ AtlasPanel::AtlasPanel(QWidget *parent)
         showPlausibility();
         save_->setEnabled(true);
         status_->setStyleSheet(QString());
+        status_->setToolTip(QString());
         status_->setText(QStringLiteral("%1: reconstructed%2 in %3 s")
                              .arg(b.r.name)
                              .arg(atlasBlendChoice(b.r.blend).said)
                              .arg(seconds, 0, 'f', 2));
         emit reconstructed(last_);
     });
+    connect(exportWatcher_, &QFutureWatcher<AtlasExport>::finished, this, [this] {
+        const AtlasExport e = exportWatcher_->result();
+        const double seconds = exportClock_.elapsed() / 1000.0;
+        setBusy(false, QString());
+        if (!e.error.isEmpty()) {
+            fail(e.error);
+            return;
+        }
+        exported_ = e;
+        status_->setStyleSheet(QString());
+        status_->setText(QStringLiteral("%1 Wrote %2.{glb,mtlx,mitsuba.json,fit.json} in %3.")
+                             .arg(atlasAnalyticText(e.parameters), e.stem, QDir::toNativeSeparators(e.dir)));
+        status_->setToolTip(QStringLiteral("%1 Fitted and written in %2 s.")
+                                .arg(atlasAnalyticErrorTip(e.parameters))
+                                .arg(seconds, 0, 'f', 1));
+        emit exported(e);
+    });
 }
 
 AtlasPanel::~AtlasPanel() {
     openWatcher_->waitForFinished();
     buildWatcher_->waitForFinished();
+    exportWatcher_->waitForFinished();
 }
 
 std::int32_t AtlasPanel::blendRule() const { return std::int32_t(blend_->currentData().toInt()); }
 
-bool AtlasPanel::busy() const { return openWatcher_->isRunning() || buildWatcher_->isRunning(); }
+bool AtlasPanel::busy() const {
+    return openWatcher_->isRunning() || buildWatcher_->isRunning() || exportWatcher_->isRunning();
+}
 
 void AtlasPanel::setBusy(bool busy, const QString &what) {
-    progress_->setVisible(busy);
+    // The bar stays while another job runs (a Validate during an export).
+    progress_->setVisible(busy || this->busy());
     progress_->setFormat(what);
     if (busy) {
         status_->setStyleSheet(QString());
+        status_->setToolTip(QString());
         status_->setText(what);
     }
     updateCoordinates();
@@ -168,6 +207,7 @@ void AtlasPanel::setBusy(bool busy, const QString &what) {
 
 void AtlasPanel::fail(const QString &message) {
     status_->setStyleSheet(atlasErrorStyle());
+    status_->setToolTip(QString());
     status_->setText(message);
     emit failed(message);
 }
@@ -180,6 +220,7 @@ void AtlasPanel::sayConfidence() {
         const double v = model->variance(m.x(), m.y());  // no pass over the store
         const brdf_atlas::Model::Marker marker = model->marker(m.x(), m.y());  // nor here
         status_->setStyleSheet(QString());
+        status_->setToolTip(QString());
         if (v > BRDF_ATLAS_LOW_CONFIDENCE_VARIANCE) {
             status_->setText(atlasLowConfidenceText(v));
         } else if (!marker.given_back() && marker.material != SIZE_MAX) {
@@ -237,6 +278,7 @@ void AtlasPanel::updateCoordinates() {
                                         : QStringLiteral("x = -, y = -"));
     }
     validate_->setEnabled(view_->model() && view_->hasMarker() && !buildWatcher_->isRunning());
+    export_->setEnabled(view_->model() && view_->hasMarker() && !exportWatcher_->isRunning());
 }
 
 QString AtlasPanel::nameFor(double x, double y) const {

@@ -89,6 +89,23 @@ QString atlasMarkerText(const QString &name, const brdf_atlas::Model::Marker &ma
         .arg(name, ratio, atlasPercentText(marker.albedo_error));
 }
 
+QString atlasAnalyticText(const brdf_atlas::Analytic &a) {
+    auto n = [](double v) { return QString::number(v, 'f', 3); };
+    auto rgb = [&](const double *c) { return QStringLiteral("(%1, %2, %3)").arg(n(c[0]), n(c[1]), n(c[2])); };
+    return QStringLiteral("glTF fit: base colour %1, metallic %2, roughness %3, specular %4, specular "
+                          "colour %5, ior %6; fit error %7 (table).")
+        .arg(rgb(a.base_color), n(a.metallic), n(a.roughness), n(a.specular), rgb(a.specular_color),
+             n(a.ior), QString::number(a.table_error, 'f', 4));
+}
+
+QString atlasAnalyticErrorTip(const brdf_atlas::Analytic &a) {
+    return QStringLiteral("Fit error: RMS over a subsample of the table's bins of the log of the fit's "
+                          "reflectance over the material's, cosine weighted. The same for one GGX lobe "
+                          "over a Lambertian base: %1; for the Lambertian of the albedo: %2.")
+        .arg(QString::number(a.single_lobe_table_error, 'f', 4),
+             QString::number(a.lambertian_table_error, 'f', 4));
+}
+
 QString atlasPlausibilityStyle(const brdf_atlas::Plausibility &p) {
     return p.plausible ? QString() : atlasErrorStyle();
 }

@@ -1,7 +1,8 @@
 // AtlasStatus.h: what the brdf-atlas panel says about a latent point, in
 // words for an artist: whether the model knows much there, and how physical
 // the material reconstructed there is (brdf_atlas_model_plausibility); the
-// blend rules Validate offers; and how a label of such words fits the panel.
+// analytic material fitted there (brdf_atlas_model_export); the blend rules
+// Validate offers; and how a label of such words fits the panel.
 //
 // Plain functions of the library's numbers, kept apart from the widgets so
 // that a test can put the same numbers into the same words.
@@ -39,6 +40,16 @@ QString atlasPlausibilityText(const brdf_atlas::Plausibility &p);
 /// the model gives back 7.2x its albedo at its marker (worst channel)").
 /// Empty where the point is no marker or the material is given back.
 QString atlasMarkerText(const QString &name, const brdf_atlas::Model::Marker &marker);
+
+/// The analytic fit `a` in words: its glTF parameters (base colour,
+/// metallic, roughness, specular factor and colour, ior) with three decimals,
+/// as `brdf-atlas export` prints them, and its table error: short enough
+/// for the panel's status line in BRDF Explorer.
+QString atlasAnalyticText(const brdf_atlas::Analytic &a);
+
+/// What the table error of `a` measures, with the two baselines' (a
+/// tooltip for the status line).
+QString atlasAnalyticErrorTip(const brdf_atlas::Analytic &a);
 
 /// The colour a label shows `p` in: empty (the palette's) when plausible,
 /// the panel's error red when not.

@@ -7,7 +7,8 @@
 //! it. [`fit_table`] fits it, and the baseline [`GgxLambert`], to a table
 //! in the metric of [`samples`] (cosine-weighted log-relative error over a
 //! fixed subsample of bins), and states the baseline [`Lambertian`] of the
-//! table's albedo in the same metric.
+//! table's albedo in the same metric. [`export`] writes a fit as glTF 2.0,
+//! MaterialX and Mitsuba 3 files, with its record.
 //!
 //! ```
 //! use brdf_atlas_analytic::{Analytic, FitParams, Principled, Samples};
@@ -30,6 +31,7 @@
 pub mod analytic;
 pub mod baseline;
 pub mod error;
+pub mod export;
 pub mod fit;
 pub mod geometry;
 pub mod principled;

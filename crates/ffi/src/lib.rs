@@ -1,7 +1,9 @@
 //! The C ABI of brdf-atlas: open a fitted model, reconstruct a material at
 //! any latent point (as a MERL table in memory or a file), evaluate it for
 //! direction pairs, read the blend weights and the albedo map (and trace its
-//! luminance contours), and locate a MERL file in the latent plane.
+//! luminance contours), locate a MERL file in the latent plane, and fit an
+//! analytic (glTF) material to a point and write it as glTF, MaterialX and
+//! Mitsuba 3 files (`brdf_atlas_model_export`).
 //!
 //! The header `include/brdf_atlas.h` is generated from this crate by
 //! cbindgen (`tests/header.rs` checks it is current);
@@ -54,7 +56,7 @@ pub mod plausibility;
 pub mod query;
 pub mod status;
 
-pub use analytic::{BrdfAtlasAnalytic, brdf_atlas_model_fit_analytic};
+pub use analytic::{BrdfAtlasAnalytic, brdf_atlas_model_export, brdf_atlas_model_fit_analytic};
 pub use consts::{
     BRDF_ATLAS_DEFAULT_VIEW_HALF_WIDTH, BRDF_ATLAS_GIVES_BACK, BRDF_ATLAS_LATENT_LIMIT,
     BRDF_ATLAS_LOW_CONFIDENCE_VARIANCE, BRDF_ATLAS_MARKER_RADIUS, BRDF_ATLAS_MAX_MAP_SIDE,

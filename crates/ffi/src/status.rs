@@ -5,6 +5,7 @@ use std::cell::RefCell;
 use std::ffi::{CString, c_char, c_int};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
+use brdf_atlas_analytic::AnalyticError;
 use brdf_atlas_core::CoreError;
 use brdf_merl::MerlError;
 
@@ -122,6 +123,18 @@ impl From<MerlError> for Failure {
                 BrdfAtlasStatus::InvalidArgument
             }
             _ => BrdfAtlasStatus::BadMerl,
+        };
+        Failure::new(status, e.to_string())
+    }
+}
+
+impl From<AnalyticError> for Failure {
+    fn from(e: AnalyticError) -> Failure {
+        let status = match e {
+            AnalyticError::NotADirectory { .. } | AnalyticError::Write { .. } => {
+                BrdfAtlasStatus::Io
+            }
+            _ => BrdfAtlasStatus::InvalidArgument,
         };
         Failure::new(status, e.to_string())
     }

@@ -3,22 +3,18 @@
 //! with what the fit loses shown beside it.
 
 pub mod compare;
-mod documents;
-mod gltf;
 
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
-use brdf_atlas_analytic::samples::EPSILON;
-use brdf_atlas_analytic::{Analytic, Principled};
+use brdf_atlas_analytic::export::{self, Export, RenderedErrors};
 use brdf_atlas_core::sheet::{self, Swatch};
 use brdf_atlas_core::swatch::{DEFAULT_LIGHTS, Light};
 use brdf_atlas_core::{BlendRule, Model};
-use brdf_atomic::{PendingFile, commit_all, stage};
+use brdf_atomic::{PendingFile, commit_all};
 use brdf_merl::MerlTable;
-use serde_json::{Value, json};
 
 use crate::args::{self, Point};
 use crate::error::Error;
@@ -181,53 +177,28 @@ fn sources(args: &Args) -> Result<Sources, Error> {
     Ok(Sources::Points(Box::new(model), points))
 }
 
-/// The fit's record: parameters, errors and how they were measured.
-fn record(src: &Source, c: &Compared, lights: &[Light]) -> Value {
-    let p = &c.fits.principled;
-    json!({
-        "format": "brdf-atlas-export",
-        "version": 1,
-        "name": src.name,
-        "source": src.origin,
-        "model": Principled::NAME,
-        "parameters": {
-            "base_color": p.model.base_color,
-            "metallic": p.model.metallic,
-            "roughness": p.model.roughness,
-            "specular": p.model.specular,
-            "specular_color": p.model.specular_color,
-            "ior": p.model.ior,
-        },
-        "rendered_error": {
-            "principled": c.rendered.principled,
-            "single_lobe": c.rendered.single_lobe,
-            "lambertian": c.rendered.lambertian,
-            "principled_held_out_lights": c.rendered.held_out,
-            "held_out_lights": compare::HELD_OUT_LIGHTS.iter().map(|l| json!({"direction": l.direction, "intensity": l.intensity})).collect::<Vec<_>>(),
-            "metric": "sum |L_fit - L_measured| / sum L_measured over a lit sphere's pixels (coverage weighted) and RGB, linear radiance",
-            "sphere_pixels": SPHERE,
-            "lights": lights.iter().map(|l| json!({"direction": l.direction, "intensity": l.intensity})).collect::<Vec<_>>(),
-        },
-        "table_error": {
-            "principled": p.error,
-            "single_lobe": c.fits.single_lobe.error,
-            "lambertian": c.fits.lambertian.error,
-            "metric": format!("RMS over a subsample of bins and RGB of ln((f_fit + e) / (f + e)), e = {EPSILON}, weighted by cos_i cos_o"),
-        },
-        "single_lobe": {
-            "diffuse": c.fits.single_lobe.model.diffuse,
-            "specular": c.fits.single_lobe.model.specular,
-            "roughness": c.fits.single_lobe.model.roughness,
-        },
-        "albedo": c.fits.lambertian.model.albedo,
-    })
+/// The lights as the analytic crate takes them.
+fn analytic_lights(lights: &[Light]) -> Vec<brdf_atlas_analytic::Light> {
+    lights
+        .iter()
+        .map(|l| brdf_atlas_analytic::Light {
+            direction: l.direction,
+            intensity: l.intensity,
+        })
+        .collect()
 }
 
-fn staged(path: &Path, bytes: &[u8]) -> Result<PendingFile, Error> {
-    stage(path, |f| f.write_all(bytes)).map_err(|source| Error::Write {
-        path: path.to_path_buf(),
-        source,
-    })
+/// The rendered errors of `c`, measured under `lights` on spheres of [`SPHERE`] pixels.
+fn rendered_errors(c: &Compared, lights: &[Light]) -> RenderedErrors {
+    RenderedErrors {
+        principled: c.rendered.principled,
+        single_lobe: c.rendered.single_lobe,
+        lambertian: c.rendered.lambertian,
+        held_out: c.rendered.held_out,
+        lights: analytic_lights(lights),
+        held_out_lights: analytic_lights(&compare::HELD_OUT_LIGHTS),
+        sphere_pixels: SPHERE,
+    }
 }
 
 /// The side-by-side picture: measured, fit, difference.
@@ -261,45 +232,30 @@ fn picture(path: &Path, src: &Source, c: &Compared) -> Result<PendingFile, Error
     Ok(sheet::stage_png(path, &sheet)?)
 }
 
-/// Stage the five files of one material.
+/// Stage the five files of one material: the analytic crate's four
+/// documents and the picture.
 fn stage_all(
     dir: &Path,
     src: &Source,
     c: &Compared,
     lights: &[Light],
 ) -> Result<Vec<PendingFile>, Error> {
-    let p = &c.fits.principled.model;
-    let rec = record(src, c, lights);
-    let note = format!(
-        "brdf-atlas export of {}: rendered error {:.2}% (sum |L' - L| / sum L, swatch lights)",
-        src.origin,
-        100.0 * c.rendered.principled
-    );
-    let file = |ext: &str| dir.join(format!("{}.{ext}", src.name));
-    let mut json_text = serde_json::to_vec_pretty(&rec).map_err(|e| Error::Input(e.to_string()))?;
-    json_text.push(b'\n');
-    let mut mitsuba = serde_json::to_vec_pretty(&documents::mitsuba(p))
-        .map_err(|e| Error::Input(e.to_string()))?;
-    mitsuba.push(b'\n');
-    Ok(vec![
-        staged(
-            &file("glb"),
-            &gltf::glb(p, &src.name, json!({"brdf_atlas": rec})),
-        )?,
-        staged(
-            &file("mtlx"),
-            documents::materialx(p, &src.name, &note).as_bytes(),
-        )?,
-        staged(&file("mitsuba.json"), &mitsuba)?,
-        staged(&file("fit.json"), &json_text)?,
-        picture(&file("png"), src, c)?,
-    ])
+    let rendered = rendered_errors(c, lights);
+    let e = Export {
+        name: &src.name,
+        source: &src.origin,
+        fits: &c.fits,
+        rendered: Some(&rendered),
+    };
+    let mut files = export::stage(dir, &e)?;
+    files.push(picture(&dir.join(format!("{}.png", src.name)), src, c)?);
+    Ok(files)
 }
 
 /// Run `export`.
 pub fn run(args: &Args) -> Result<ExitCode, Error> {
     if let Some(name) = &args.name
-        && (name.is_empty() || name.contains(['/', '\\']) || name.starts_with('.'))
+        && !export::is_file_stem(name)
     {
         return Err(Error::Input(format!(
             "--name {name:?}: expected a file name without a directory or a leading dot"

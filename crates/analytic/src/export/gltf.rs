@@ -3,7 +3,7 @@
 //! single vertices with triangle fans) carrying the fitted material as
 //! `pbrMetallicRoughness` with `KHR_materials_specular`.
 
-use brdf_atlas_analytic::Principled;
+use crate::Principled;
 use serde_json::{Value, json};
 
 /// Rings between the poles, and vertices around each ring.

@@ -13,7 +13,7 @@
 //! and its `spec_tint` tints towards the base colour's hue, not to a colour
 //! of its own, so it stays 0 and the specular colour's hue is lost.
 
-use brdf_atlas_analytic::Principled;
+use crate::Principled;
 use serde_json::{Value, json};
 
 /// A MaterialX identifier from `name`: letters, digits and `_`, not
