@@ -132,7 +132,7 @@ fn leave_one_out(w: &mut dyn Write, plan: &Plan, r: &Results) -> io::Result<()> 
         r.scored_rows,
         r.d,
         if plan.eighth {
-            ", on every 8th phi_d bin (`--quick`; the plausible rule's held-out steps judge their clamp budgets on the same bins)"
+            ", on every 8th phi_d bin (`--quick`), where the plausible rule's held-out steps judge their clamp budgets too"
         } else {
             ""
         },
