@@ -6,22 +6,15 @@ use std::ptr::null_mut;
 
 use brdf_atlas_analytic::{SWATCH_LIGHTS, fit_as_exported};
 use brdf_atlas_c::*;
-use brdf_atlas_core::{BlendRule, FitOptions, GplvmParams, Model, NoProgress, Precision};
-use brdf_atlas_core::{TransformKind, fit_dir};
-use brdf_merl::{Dims, synth};
+use brdf_atlas_core::{BlendRule, Model};
+use common::small_model;
+
+mod common;
 
 #[test]
 fn the_parameters_are_the_fit_of_the_points_material() {
     let tmp = tempfile::tempdir().unwrap();
-    let data = tmp.path().join("data");
-    synth::write_dir(&data, 4, Dims::new(16, 16, 32).unwrap(), 2).unwrap();
-    let path = tmp.path().join("m.atlas");
-    let options = FitOptions {
-        params: GplvmParams::new(2).check().unwrap(),
-        transform: TransformKind::Log,
-        precision: Precision::F64,
-    };
-    fit_dir(&data, &path, &options, &NoProgress).unwrap();
+    let path = small_model(tmp.path());
     let c = CString::new(path.to_str().unwrap()).unwrap();
     let mut h = null_mut();
     assert_eq!(

@@ -8,9 +8,10 @@ use std::path::Path;
 use std::ptr::{null, null_mut};
 
 use brdf_atlas_c::*;
-use brdf_atlas_core::{FitOptions, GplvmParams, NoProgress, Precision, TransformKind, fit_dir};
-use brdf_merl::{Dims, synth};
+use common::small_model;
 use serde_json::Value;
+
+mod common;
 
 fn c(s: &str) -> CString {
     CString::new(s).unwrap()
@@ -48,15 +49,7 @@ fn names(dir: &Path) -> Vec<String> {
 #[test]
 fn the_files_carry_the_fitted_parameters_and_bad_arguments_write_nothing() {
     let tmp = tempfile::tempdir().unwrap();
-    let data = tmp.path().join("data");
-    synth::write_dir(&data, 4, Dims::new(16, 16, 32).unwrap(), 2).unwrap();
-    let path = tmp.path().join("m.atlas");
-    let options = FitOptions {
-        params: GplvmParams::new(2).check().unwrap(),
-        transform: TransformKind::Log,
-        precision: Precision::F64,
-    };
-    fit_dir(&data, &path, &options, &NoProgress).unwrap();
+    let path = small_model(tmp.path());
     let mut h = null_mut();
     let model_path = c(path.to_str().unwrap());
     assert_eq!(

@@ -314,19 +314,10 @@ pub fn evaluate_some(
         },
         |g, range| {
             let len = range.len();
-            let ids = match &kept {
-                Some(k) => RowIds::List(&k[range]),
-                None => RowIds::From(range.start),
-            };
+            let listed = kept.as_ref().map(|k| &k[range.clone()]);
+            let ids = listed.map_or(RowIds::From(range.start), RowIds::List);
             let z = &mut g.zbuf[..len * n];
-            match ids {
-                RowIds::From(r0) => store.copy_rows(r0, z),
-                RowIds::List(k) => {
-                    for (o, &r) in z.chunks_exact_mut(n).zip(k) {
-                        store.copy_rows(r as usize, o);
-                    }
-                }
-            }
+            store.copy_listed(range.start, listed, z);
             // Bin-major rows are the columns of an n x len matrix.
             matmul(&mut g.out[..len * mn], &stacked, z, n);
             let tops = &mut g.tops;

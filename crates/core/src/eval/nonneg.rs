@@ -14,7 +14,7 @@
 
 use faer::{Mat, MatRef};
 
-use crate::data::store::{Rows, Store};
+use crate::data::store::Store;
 use crate::dense::product::matmul;
 use crate::error::{ParamError, Result};
 use crate::gplvm::kernel::{Kernel, rows_of};
@@ -181,21 +181,10 @@ fn budget_pass(
             )
         },
         |(budget, zbuf, out), range| {
-            let (r0, r1, len) = (range.start, range.end, range.len());
+            let (r0, len) = (range.start, range.len());
             let z = &mut zbuf[..len * n];
             let ids = kept.as_ref().map(|k| &k[range]);
-            match (ids, store.z()) {
-                (Some(ids), _) => {
-                    for (o, &r) in z.chunks_exact_mut(n).zip(ids) {
-                        store.copy_rows(r as usize, o);
-                    }
-                }
-                (None, Rows::F32(s)) => z
-                    .iter_mut()
-                    .zip(&s[r0 * n..r1 * n])
-                    .for_each(|(o, v)| *o = *v as f64),
-                (None, Rows::F64(s)) => z.copy_from_slice(&s[r0 * n..r1 * n]),
-            }
+            store.copy_listed(r0, ids, z);
             // Bin-major rows are the columns of an n x len matrix.
             matmul(&mut out[..len * 2 * n], &stacked, z, n);
             for k in 0..len {
