@@ -31,6 +31,7 @@
 #include <QLayout>
 #include <QProgressBar>
 #include <QPushButton>
+#include <QScrollArea>
 #include <QSettings>
 #include <QSignalSpy>
 #include <QTemporaryDir>
@@ -116,6 +117,66 @@ private slots:
         // Away from every point: no name.
         QTest::mouseMove(view_, QPoint(1, 1));
         QTRY_COMPARE(view_->hoveredMaterial(), -1);
+    }
+
+    void hoverNameStaysInside() {
+        // Each material's point brought next to a corner of the view (right
+        // and top edges, then left and bottom): its name is drawn inside the
+        // widget, whole, beside the point.
+        const QPointF centre = view_->centre();
+        const double scale = view_->scale();
+        const QFontMetricsF fm(view_->font());
+        const QPointF corners[] = {QPointF(view_->width() - 3, 3), QPointF(3, view_->height() - 3)};
+        for (int i = 0; i < view_->materialPoints().size(); ++i) {
+            for (const QPointF &corner : corners) {
+                const QPointF p = view_->materialPoints()[i];
+                // latentToWidget(p) == corner: p lies that far from the centre.
+                view_->setWindow(QPointF(p.x() - (corner.x() - view_->width() / 2.0) * scale,
+                                         p.y() + (corner.y() - view_->height() / 2.0) * scale),
+                                 scale);
+                const QPoint at = view_->latentToWidget(p).toPoint();
+                QVERIFY(view_->rect().contains(at));
+                QTest::mouseMove(view_, at);
+                QTRY_VERIFY(view_->hoveredMaterial() >= 0);
+                const int h = view_->hoveredMaterial();
+                const QRectF box = view_->labelRect(h);
+                QVERIFY2(QRectF(view_->rect()).contains(box),
+                         qPrintable(QStringLiteral("%1: %2,%3 %4x%5 in %6x%7")
+                                        .arg(view_->materialNames()[h])
+                                        .arg(box.x()).arg(box.y()).arg(box.width()).arg(box.height())
+                                        .arg(view_->width()).arg(view_->height())));
+                QVERIFY(box.width() >= std::min(fm.horizontalAdvance(view_->materialNames()[h]),
+                                                double(view_->width()) - 8));
+                // Beside the point, not on it.
+                QVERIFY(!box.contains(view_->latentToWidget(view_->materialPoints()[h])));
+            }
+        }
+        QTest::mouseMove(view_, QPoint(1, 1));
+        view_->setWindow(centre, scale);
+        waitForMap();
+    }
+
+    void mapSizeDoesNotDependOnTheTexts() {
+        // A status line of many lines and the busy bar leave the map as it
+        // is: the texts scroll in their box of fixed height instead.
+        const QSize before = view_->size();
+        const int boxHeight = panel_->textsBox()->height();
+        const QString status = panel_->statusLabel()->text();
+        QStringList lines;
+        for (int k = 0; k < 4 * AtlasPanel::kTextLines; ++k) lines << QStringLiteral("line %1 of a long status").arg(k);
+        panel_->statusLabel()->setText(lines.join('\n'));
+        panel_->progressBar()->setVisible(true);
+        QTest::qWait(100);  // the layouts settle
+        QCOMPARE(view_->size(), before);
+        QCOMPARE(panel_->textsBox()->height(), boxHeight);
+        // The whole text is there, scrolled to.
+        QVERIFY(panel_->textsBox()->widget()->height() > panel_->textsBox()->viewport()->height());
+        QVERIFY(panel_->statusLabel()->height() >= panel_->statusLabel()->heightForWidth(panel_->statusLabel()->width()));
+        QVERIFY(!view_->mapPending());  // nothing recomputed
+        panel_->progressBar()->setVisible(false);
+        panel_->statusLabel()->setText(status);
+        QTest::qWait(100);
+        QCOMPARE(view_->size(), before);
     }
 
     void wheelZoomsAboutTheCursor() {
@@ -233,8 +294,18 @@ private slots:
         // brought into view if the zooms and pans before left it outside
         // (with a model of many materials the two may lie far apart).
         const QPointF mid = (view_->materialPoints()[0] + view_->materialPoints()[1]) / 2;
-        if (!view_->rect().contains(view_->latentToWidget(mid).toPoint())) {
-            view_->setWindow(mid, view_->scale());
+        // Zoomed in until no material's point is within two hit radii of the
+        // midpoint (a click there would pick that material).
+        double scale = view_->scale();
+        auto clear = [this, &mid](double s) {
+            for (const QPointF &p : view_->materialPoints()) {
+                if (std::hypot(p.x() - mid.x(), p.y() - mid.y()) / s <= 2 * AtlasMapView::kHitRadius) return false;
+            }
+            return true;
+        };
+        while (!clear(scale)) scale /= 2;
+        if (scale != view_->scale() || !view_->rect().contains(view_->latentToWidget(mid).toPoint())) {
+            view_->setWindow(mid, scale);
             waitForMap();
         }
         const QPoint at = view_->latentToWidget(mid).toPoint();
@@ -617,6 +688,75 @@ private slots:
         QVERIFY2(!panel_->statusLabel()->text().contains("knows little"),
                  qPrintable(panel_->statusLabel()->text()));
         view_->setWindow(centre, scale);
+        waitForMap();
+    }
+
+    void clickOnAMaterialPicksItExactly() {
+        // A click a few pixels off a material's point picks that material's
+        // latent point exactly (the nearest point within kHitRadius), so a
+        // material in a cluster is picked without zooming in.
+        QSignalSpy marker(view_, &AtlasMapView::markerChanged);
+        for (int i = 0; i < view_->materialPoints().size(); ++i) {
+            const QPointF p = view_->materialPoints()[i];
+            if (!view_->rect().adjusted(8, 8, -8, -8).contains(view_->latentToWidget(p).toPoint())) continue;
+            const QPoint at = view_->latentToWidget(p).toPoint() + QPoint(3, -2);
+            // The expected pick, by brute force over every material.
+            int nearest = -1;
+            double best = AtlasMapView::kHitRadius;
+            for (int j = 0; j < view_->materialPoints().size(); ++j) {
+                const QPointF d = view_->latentToWidget(view_->materialPoints()[j]) - QPointF(at);
+                const double dist = std::hypot(d.x(), d.y());
+                if (dist <= best) {
+                    best = dist;
+                    nearest = j;
+                }
+            }
+            QVERIFY(nearest >= 0);
+            QTest::mouseClick(view_, Qt::LeftButton, Qt::NoModifier, at);
+            QCOMPARE(view_->marker(), view_->materialPoints()[nearest]);
+            QCOMPARE(marker.last()[0].toDouble(), view_->materialPoints()[nearest].x());
+        }
+        QVERIFY(marker.count() > 0);
+        // Far from every point: the point under the cursor.
+        for (int y = 4; y < view_->height(); y += 9) {
+            for (int x = 4; x < view_->width(); x += 9) {
+                bool far = true;
+                for (const QPointF &p : view_->materialPoints()) {
+                    const QPointF d = view_->latentToWidget(p) - QPointF(x, y);
+                    far = far && std::hypot(d.x(), d.y()) > 2 * AtlasMapView::kHitRadius;
+                }
+                if (!far) continue;
+                QTest::mouseClick(view_, Qt::LeftButton, Qt::NoModifier, QPoint(x, y));
+                QCOMPARE(view_->marker(), view_->widgetToLatent(QPointF(x, y)));
+                return;
+            }
+        }
+        QFAIL("no pixel of the view is far from every material");
+    }
+
+    void largerMapIsItsOwnWindow() {
+        // "Larger map" moves the same view (window, marker, map) into a
+        // window of its own, large and square; a click there is the panel's
+        // marker; closing the window brings the map back.
+        const QSize inPanel = view_->size();
+        QTest::mouseClick(panel_->detachButton(), Qt::LeftButton);
+        QVERIFY(panel_->mapDetached());
+        QVERIFY(QTest::qWaitForWindowExposed(panel_->mapWindow()));
+        QCOMPARE(static_cast<QWidget *>(view_)->window(), panel_->mapWindow());
+        QTRY_VERIFY(view_->width() >= 320 && view_->height() >= 320);
+        QVERIFY(view_->width() > inPanel.width() || view_->height() > inPanel.height());
+        waitForMap();
+        const QPoint at(view_->width() / 3, view_->height() / 3);
+        QTest::mouseClick(view_, Qt::LeftButton, Qt::NoModifier, at);
+        const int i = view_->nearestMaterial(view_->marker());
+        QVERIFY(panel_->coordinatesLabel()->text().contains(QString::number(view_->marker().x(), 'f', 4)));
+        QVERIFY(i >= 0);
+        QVERIFY(panel_->mapWindow()->close());
+        QVERIFY(!panel_->mapDetached());
+        QVERIFY(!panel_->detachButton()->isChecked());
+        QCOMPARE(static_cast<QWidget *>(view_)->window(), static_cast<QWidget *>(panel_));
+        QVERIFY(view_->isVisible() && !panel_->mapWindow()->isVisible());
+        QTRY_COMPARE(view_->size(), inPanel);
         waitForMap();
     }
 

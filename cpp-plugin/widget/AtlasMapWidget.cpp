@@ -2,6 +2,7 @@
 // AtlasMapWidget.h); the panel around the view is in AtlasPanel.cpp.
 #include "AtlasMapWidget.h"
 
+#include <QFontMetricsF>
 #include <QMouseEvent>
 #include <QPainter>
 #include <QPainterPath>
@@ -18,8 +19,6 @@ namespace {
 
 // A drag starts once the mouse moved this far (pixels) with the button down.
 constexpr double kDragThreshold = 3.0;
-// Reference points are hit within this radius (pixels).
-constexpr double kHitRadius = 7.0;
 // One wheel notch (120 units) zooms by 2^(1/4).
 constexpr double kNotchZoom = 0.25;
 
@@ -170,6 +169,7 @@ int AtlasMapView::nearestMaterial(const QPointF &latent) const {
 int AtlasMapView::materialAt(const QPointF &widgetPos) const {
     int best = -1;
     double bestD = kHitRadius * kHitRadius;
+    // The nearest within the radius: in a cluster, the one under the cursor.
     for (int i = 0; i < points_.size(); ++i) {
         const QPointF d = latentToWidget(points_[i]) - widgetPos;
         const double dd = d.x() * d.x() + d.y() * d.y();
@@ -179,6 +179,23 @@ int AtlasMapView::materialAt(const QPointF &widgetPos) const {
         }
     }
     return best;
+}
+
+QRectF AtlasMapView::labelRect(int i) const {
+    if (i < 0 || i >= points_.size()) return QRectF();
+    const QFontMetricsF fm(font());
+    const QSizeF size(fm.horizontalAdvance(names_[i]) + 8, fm.height() + 4);
+    const QPointF c = latentToWidget(points_[i]);
+    // Up and to the right of the point; to its left or below it where that
+    // would leave the widget; never wider than the widget.
+    QRectF box(c + QPointF(8, -8 - size.height()), size);
+    if (box.right() > width()) box.moveRight(c.x() - 8);
+    if (box.top() < 0) box.moveTop(c.y() + 8);
+    const double w = std::min(box.width(), double(width()));
+    box.setWidth(w);
+    box.moveLeft(std::min(std::max(box.left(), 0.0), width() - w));
+    box.moveTop(std::min(std::max(box.top(), 0.0), std::max(0.0, height() - box.height())));
+    return box;
 }
 
 bool AtlasMapView::mapPending() const {
@@ -360,8 +377,13 @@ void AtlasMapView::paintEvent(QPaintEvent *) {
         p.setBrush(hot ? QColor(255, 220, 60) : QColor(255, 255, 255));
         p.drawEllipse(c, hot ? 5.0 : 3.5, hot ? 5.0 : 3.5);
         if (hot) {
+            // A dark plate under the name: it reads on any albedo.
+            const QRectF box = labelRect(i);
+            p.setPen(Qt::NoPen);
+            p.setBrush(QColor(0, 0, 0, 140));
+            p.drawRoundedRect(box, 3, 3);
             p.setPen(Qt::white);
-            p.drawText(c + QPointF(8, -6), names_[i]);
+            p.drawText(box, Qt::AlignCenter, names_[i]);
         }
     }
     // Marker.
@@ -446,7 +468,10 @@ void AtlasMapView::mouseReleaseEvent(QMouseEvent *e) {
         setCursor(Qt::CrossCursor);
         return;
     }
-    setMarker(widgetToLatent(e->localPos()));
+    // A click on a material's point (within kHitRadius) picks that material
+    // exactly; anywhere else, the point under the cursor.
+    const int i = materialAt(e->localPos());
+    setMarker(i >= 0 ? points_[i] : widgetToLatent(e->localPos()));
 }
 
 void AtlasMapView::leaveEvent(QEvent *) {

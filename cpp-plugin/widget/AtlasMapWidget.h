@@ -5,15 +5,19 @@
 // preview that follows every zoom and pan as it happens, then the full map
 // once the motion stops, the stale one cancelled), its
 // luminance contour lines, the model's materials as reference points (name
-// on hover) and a marker where the user clicked; the wheel zooms about the
-// cursor, dragging pans. AtlasPanel puts the view beside the latent
+// on hover, kept inside the map) and a marker where the user clicked (on a
+// material's point when the click is within a few pixels of it); the wheel
+// zooms about the cursor, dragging pans. AtlasPanel puts the view beside the latent
 // coordinates of the marker, a "Validate" button that reconstructs the
 // material there off the GUI thread (with a busy indicator) under the blend
 // rule chosen above it and says under it how physical that material is,
 // a "Save .binary..." button, and "Export analytic..." that fits glTF
 // parameters to the material at the marker off the GUI thread and writes
 // them as glTF, MaterialX and Mitsuba 3 files into a directory
-// (brdf_atlas_model_export), saying the parameters and the fit's error.
+// (brdf_atlas_model_export), saying the parameters and the fit's error, and
+// "Larger map", which shows the view in a window of its own. The texts
+// that change sit in a scrolled box of fixed height: the map's size
+// depends on the panel's alone.
 // The panel emits `reconstructed` with the whole MERL table; what to do
 // with it (a BRDF in BRDF Explorer's list, a file) is the host's business.
 //
@@ -28,6 +32,7 @@
 #include <QLineF>
 #include <QMetaType>
 #include <QPointF>
+#include <QRectF>
 #include <QString>
 #include <QStringList>
 #include <QTimer>
@@ -44,6 +49,7 @@ class QComboBox;
 class QLabel;
 class QProgressBar;
 class QPushButton;
+class QScrollArea;
 
 /// A material reconstructed at a latent point: what `AtlasPanel` hands out.
 struct AtlasReconstruction {
@@ -127,6 +133,12 @@ public:
 
     /// Index of the material under the mouse, -1 if none.
     int hoveredMaterial() const { return hovered_; }
+    /// A material's point is under the cursor within this radius (pixels):
+    /// it is hovered, and a click there picks exactly that material.
+    static constexpr double kHitRadius = 7.0;
+    /// Where the hovered name of material `i` is drawn: beside its point,
+    /// always inside the widget (empty for no such material).
+    QRectF labelRect(int i) const;
     /// Index of the material nearest to a latent point (-1 without a model).
     int nearestMaterial(const QPointF &latent) const;
 
@@ -251,6 +263,16 @@ public:
     QPushButton *saveButton() const { return save_; }
     /// "Export analytic...": enabled while a point is picked.
     QPushButton *exportButton() const { return export_; }
+    /// "Larger map" (checkable): the map in a window of its own, kDetachedSide
+    /// pixels square to start with and resizable, the panel's texts and
+    /// buttons staying where they are; closing that window (or unchecking)
+    /// brings the map back into the panel. The view is the same widget, so
+    /// its window, marker and computed map go with it.
+    QPushButton *detachButton() const { return detach_; }
+    bool mapDetached() const;
+    /// The window the map is detached into (hidden while it is attached).
+    QWidget *mapWindow() const { return mapWindow_; }
+    static constexpr int kDetachedSide = 640;
     /// The blend rule Validate makes the material with: "Soft floor"
     /// (BRDF_ATLAS_BLEND_FLOOR, the default), "GP" (BRDF_ATLAS_BLEND_GP) or
     /// "Stepped" (BRDF_ATLAS_BLEND_PLAUSIBLE); each item's data is its rule.
@@ -261,6 +283,12 @@ public:
     QProgressBar *progressBar() const { return progress_; }
     QLabel *coordinatesLabel() const { return coords_; }
     QLabel *statusLabel() const { return status_; }
+    /// The box of fixed height under the buttons that holds the texts
+    /// which change (coordinates, plausibility, busy bar, status), scrolled
+    /// when they outgrow it, so that they never change the map's size.
+    QScrollArea *textsBox() const { return details_; }
+    /// Lines of text that box shows without scrolling.
+    static constexpr int kTextLines = 8;
     /// The plausibility of the material validated at the marker, under the
     /// buttons; greyed while the marker is at a point not validated.
     QLabel *plausibilityLabel() const { return plausibility_; }
@@ -317,8 +345,11 @@ protected:
     /// panel squeezed to its minimum (a splitter, a small window) cuts no
     /// text off.
     bool event(QEvent *e) override;
+    /// The detached map's window closing brings the map back.
+    bool eventFilter(QObject *watched, QEvent *e) override;
 
 private:
+    void setMapDetached(bool detached);
     void updateCoordinates();
     /// Say in the status line whether the model knows much at the marker.
     void sayConfidence();
@@ -335,11 +366,15 @@ private:
     QPushButton *validate_;
     QPushButton *save_;
     QPushButton *export_;
+    QPushButton *detach_;
+    QWidget *mapWindow_;
+    QLabel *mapAway_;
     QLabel *blendLabel_;
     QComboBox *blend_;
     QLabel *plausibility_;
     QProgressBar *progress_;
     QLabel *status_;
+    QScrollArea *details_;
     QString modelPath_;
     AtlasReconstruction last_;
     AtlasExport exported_;

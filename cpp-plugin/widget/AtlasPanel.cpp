@@ -12,6 +12,7 @@
 #include <QLabel>
 #include <QProgressBar>
 #include <QPushButton>
+#include <QScrollArea>
 #include <QSettings>
 #include <QVBoxLayout>
 #include <QtConcurrent/QtConcurrentRun>
@@ -34,11 +35,15 @@ AtlasPanel::AtlasPanel(QWidget *parent)
       validate_(new QPushButton(QStringLiteral("Validate"))),
       save_(new QPushButton(QStringLiteral("Save .binary..."))),
       export_(new QPushButton(QStringLiteral("Export analytic..."))),
+      detach_(new QPushButton(QStringLiteral("Larger map"))),
+      mapWindow_(new QWidget(this, Qt::Window)),
+      mapAway_(new QLabel(QStringLiteral("The map is in its own window: close it to bring the map back."))),
       blendLabel_(new QLabel(QStringLiteral("Blend:"))),
       blend_(new QComboBox),
       plausibility_(new QLabel),
       progress_(new QProgressBar),
       status_(new QLabel),
+      details_(new QScrollArea),
       openWatcher_(new QFutureWatcher<Opened>(this)),
       buildWatcher_(new QFutureWatcher<Built>(this)),
       exportWatcher_(new QFutureWatcher<AtlasExport>(this)) {
@@ -55,7 +60,6 @@ AtlasPanel::AtlasPanel(QWidget *parent)
     layout->addWidget(view_, 1);
     coords_->setTextInteractionFlags(Qt::TextSelectableByMouse);
     coords_->setWordWrap(true);
-    layout->addWidget(coords_);
     // The blend rule on a row of its own above the buttons: beside them it
     // would widen the panel past BRDF Explorer's parameter window.
     auto *rule = new QHBoxLayout;
@@ -89,7 +93,19 @@ AtlasPanel::AtlasPanel(QWidget *parent)
                        "(.mtlx) and Mitsuba 3 (.mitsuba.json) files with the fit's record (.fit.json) "
                        "into a directory"));
     files->addWidget(export_);
+    detach_->setCheckable(true);
+    detach_->setToolTip(QStringLiteral("Show the map in a window of its own, as large as you make it"));
+    files->addWidget(detach_);
     files->addStretch(1);
+    mapWindow_->setWindowTitle(QStringLiteral("brdf-atlas map"));
+    mapWindow_->setObjectName(QStringLiteral("brdfAtlasMapWindow"));
+    auto *windowLayout = new QVBoxLayout(mapWindow_);
+    windowLayout->setContentsMargins(0, 0, 0, 0);
+    mapWindow_->installEventFilter(this);
+    mapAway_->setWordWrap(true);
+    mapAway_->setMinimumWidth(1);
+    mapAway_->setAlignment(Qt::AlignCenter);
+    mapAway_->setVisible(false);
     layout->addLayout(files);
     plausibility_->setWordWrap(true);
     plausibility_->setTextInteractionFlags(Qt::TextSelectableByMouse);
@@ -97,13 +113,29 @@ AtlasPanel::AtlasPanel(QWidget *parent)
         QStringLiteral("How physical the validated material is: the share of its reflectance that "
                        "came out negative and was clamped to 0 (at most 1% is plausible), and its "
                        "largest directional albedo (at most 1: no more light out than in)"));
-    layout->addWidget(plausibility_);
     progress_->setRange(0, 0);  // busy indicator: the library reports no fraction
     progress_->setTextVisible(true);
     progress_->setVisible(false);
-    layout->addWidget(progress_);
     status_->setWordWrap(true);
-    layout->addWidget(status_);
+    // The texts that change (the marker's coordinates, the plausibility
+    // line, the busy bar, the status line) in a box of fixed height under
+    // the buttons, scrolled when they outgrow it: the map's size depends
+    // on the panel's alone, so a wrapping status line or the busy bar never
+    // shrinks it (nor recomputes it).
+    auto *texts = new QWidget;
+    auto *column = new QVBoxLayout(texts);
+    column->setContentsMargins(0, 0, 0, 0);
+    for (QWidget *w : std::initializer_list<QWidget *>{coords_, plausibility_, progress_, status_}) {
+        column->addWidget(w);
+    }
+    column->addStretch(1);
+    details_->setObjectName(QStringLiteral("brdfAtlasTexts"));
+    details_->setWidget(texts);
+    details_->setWidgetResizable(true);
+    details_->setFrameShape(QFrame::NoFrame);
+    details_->setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
+    details_->setFixedHeight(kTextLines * fontMetrics().lineSpacing() + 3 * column->spacing());
+    layout->addWidget(details_);
     validate_->setEnabled(false);
     save_->setEnabled(false);
     export_->setEnabled(false);
@@ -118,6 +150,7 @@ AtlasPanel::AtlasPanel(QWidget *parent)
     connect(validate_, &QPushButton::clicked, this, &AtlasPanel::validatePoint);
     connect(save_, &QPushButton::clicked, this, &AtlasPanel::saveDialog);
     connect(export_, &QPushButton::clicked, this, &AtlasPanel::exportDialog);
+    connect(detach_, &QPushButton::toggled, this, &AtlasPanel::setMapDetached);
     connect(blend_, QOverload<int>::of(&QComboBox::currentIndexChanged), this, [this] {
         const AtlasBlendChoice &c = atlasBlendChoice(blendRule());
         blend_->setToolTip(c.tip);
@@ -250,6 +283,36 @@ void AtlasPanel::showPlausibility() {
     } else {
         plausibility_->setText(QStringLiteral("Plausibility: Validate checks the material at the marker."));
     }
+}
+
+bool AtlasPanel::mapDetached() const { return detach_->isChecked(); }
+
+void AtlasPanel::setMapDetached(bool detached) {
+    if (detach_->isChecked() != detached) {
+        detach_->setChecked(detached);  // toggled() calls back with the same value
+        return;
+    }
+    auto *column = static_cast<QVBoxLayout *>(layout());
+    if (detached && view_->parentWidget() != mapWindow_) {
+        column->replaceWidget(view_, mapAway_);
+        mapAway_->setVisible(true);
+        mapWindow_->layout()->addWidget(view_);
+        view_->setVisible(true);
+        mapWindow_->resize(kDetachedSide, kDetachedSide);
+        mapWindow_->show();
+        mapWindow_->raise();
+    } else if (!detached && view_->parentWidget() == mapWindow_) {
+        mapWindow_->layout()->removeWidget(view_);
+        column->replaceWidget(mapAway_, view_);
+        mapAway_->setVisible(false);
+        view_->setVisible(true);
+        mapWindow_->hide();
+    }
+}
+
+bool AtlasPanel::eventFilter(QObject *watched, QEvent *e) {
+    if (watched == mapWindow_ && e->type() == QEvent::Close) setMapDetached(false);
+    return QWidget::eventFilter(watched, e);
 }
 
 bool AtlasPanel::event(QEvent *e) {
