@@ -66,7 +66,7 @@ pub struct Args {
     pub out: PathBuf,
     #[arg(long, help = plan::q_max_help(), value_parser = clap::value_parser!(u32).range(1..=MAX_Q as i64))]
     pub q_max: Option<u32>,
-    /// Fewer settings (sample counts, map sizes, steps, a 2 x 2 plausibility
+    /// Fewer settings (sample counts, maps of 32 to 128 pixels, steps, a 2 x 2 plausibility
     /// grid, leave-one-out errors, the plausible rule's held-out steps and
     /// the grid's clamped shares on every 8th phi_d bin): a report in
     /// seconds on small data. It leaves the prepared map out unless

@@ -80,9 +80,12 @@ impl Plan {
                 optimizer,
                 min_steps: vec![1e-1, 1e-2, 1e-3],
                 samples: vec![16, 64, 256],
-                sizes: vec![64, 128, 256],
+                // A quarter of the pixels of the default plan's maps: the
+                // time of a per-pixel map is proportional to its pixels,
+                // which three sizes show as well as four.
+                sizes: vec![32, 64, 128],
                 grid: 2,
-                timed_size: 128,
+                timed_size: 64,
                 points: 2,
                 repeat: false,
                 plausibility_grid: PLAUSIBILITY_GRID[0],
