@@ -8,6 +8,7 @@
 #include <QMenu>
 #include <QScrollArea>
 #include <QSplitter>
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 
@@ -58,7 +59,9 @@ void splitPanelFromList( AtlasPanel* panel, QGridLayout* layout )
     splitter->setChildrenCollapsible( false );
     splitter->addWidget( panel );
     splitter->addWidget( list );
-    panel->setMinimumHeight( kPanelMinHeight );
+    // Never below what its layout needs (the map's least size, the buttons
+    // and the box of texts), which the splitter would otherwise cut off.
+    panel->setMinimumHeight( std::max( kPanelMinHeight, panel->minimumSizeHint().height() ) );
     list->setMinimumHeight( kListMinHeight );
     // At first half each (the splitter scales these to its height); a
     // taller window then gives its height to the list, and the handle moves

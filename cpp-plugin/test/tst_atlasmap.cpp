@@ -113,7 +113,7 @@ private slots:
         const QPoint at = view_->latentToWidget(view_->materialPoints()[i]).toPoint();
         QTest::mouseMove(view_, at);
         QTRY_COMPARE(view_->hoveredMaterial(), i);
-        QCOMPARE(QToolTip::text(), view_->materialNames()[i]);
+        QVERIFY(!view_->labelRect(i).isEmpty());
         // Away from every point: no name.
         QTest::mouseMove(view_, QPoint(1, 1));
         QTRY_COMPARE(view_->hoveredMaterial(), -1);

@@ -6,7 +6,6 @@
 #include <QMouseEvent>
 #include <QPainter>
 #include <QPainterPath>
-#include <QToolTip>
 #include <QWheelEvent>
 #include <QtConcurrent/QtConcurrentRun>
 
@@ -451,12 +450,7 @@ void AtlasMapView::mouseMoveEvent(QMouseEvent *e) {
     const int i = materialAt(e->localPos());
     if (i != hovered_) {
         hovered_ = i;
-        update();
-        if (i >= 0) {
-            QToolTip::showText(e->globalPos(), names_[i], this);
-        } else {
-            QToolTip::hideText();
-        }
+        update();  // the name is drawn beside the point (labelRect)
     }
 }
 

@@ -288,7 +288,7 @@ public:
     /// when they outgrow it, so that they never change the map's size.
     QScrollArea *textsBox() const { return details_; }
     /// Lines of text that box shows without scrolling.
-    static constexpr int kTextLines = 8;
+    static constexpr int kTextLines = 6;
     /// The plausibility of the material validated at the marker, under the
     /// buttons; greyed while the marker is at a point not validated.
     QLabel *plausibilityLabel() const { return plausibility_; }
