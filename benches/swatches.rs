@@ -11,9 +11,10 @@ mod common;
 
 use std::hint::black_box;
 
-use brdf_atlas_core::swatch::DEFAULT_LIGHTS;
-use brdf_atlas_core::{BlendRule, View, fit_dir, sheet};
+use brdf_atlas_core::{BlendRule, View, fit_dir};
 use brdf_atlas_core::{FitOptions, GplvmParams, Model, NoProgress, Precision, TransformKind};
+use brdf_atlas_pictures::sphere::DEFAULT_LIGHTS;
+use brdf_atlas_pictures::swatch_sheet;
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn swatches(c: &mut Criterion) {
@@ -32,7 +33,7 @@ fn swatches(c: &mut Criterion) {
             Model::open(out).expect("open model")
         }
     };
-    let points = sheet::grid_points(&View::default(), 8);
+    let points = swatch_sheet::grid_points(&View::default(), 8);
     let mut g = c.benchmark_group("swatches");
     g.sample_size(10);
     for (name, rule) in [
@@ -42,10 +43,16 @@ fn swatches(c: &mut Criterion) {
     ] {
         g.bench_function(name, |b| {
             b.iter(|| {
-                let s =
-                    sheet::swatches(&model, black_box(&points), None, 128, &DEFAULT_LIGHTS, rule)
-                        .expect("swatches");
-                sheet::compose(&s, 8)
+                let s = swatch_sheet::swatches(
+                    &model,
+                    black_box(&points),
+                    None,
+                    128,
+                    &DEFAULT_LIGHTS,
+                    rule,
+                )
+                .expect("swatches");
+                swatch_sheet::compose(&s, 8)
             })
         });
     }

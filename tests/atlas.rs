@@ -7,8 +7,8 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use brdf_atlas_core::AlbedoMethod;
-use brdf_atlas_core::render::read_sidecar;
 use brdf_atlas_core::{BlendRule, Model, OptimizerKind};
+use brdf_atlas_pictures::map_picture::read_sidecar;
 use brdf_merl::{MerlFile, angles::direction};
 use common::{FIXTURE_DIMS as DIMS, Fixture, assert_one_error_line};
 use common::{binaries, brdf_atlas, map, synth, texts};

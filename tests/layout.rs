@@ -15,10 +15,12 @@ use std::path::{Path, PathBuf};
 const MAX_LINES: usize = 700;
 
 /// The crates' source roots, relative to the workspace (the Python
-/// package's crate too, though it is outside the workspace).
+/// package's crate too, though it is outside the workspace); every crate
+/// under `crates/` must be here ([`every_crate_is_checked`]).
 const ROOTS: &[&str] = &[
     "src",
     "crates/core/src",
+    "crates/pictures/src",
     "crates/atomic/src",
     "crates/mapguard/src",
     "crates/merl/src",
@@ -242,6 +244,19 @@ fn cycles(root: &Path) -> Vec<String> {
 }
 
 #[test]
+fn every_crate_is_checked() {
+    let mut missing = Vec::new();
+    for entry in std::fs::read_dir(workspace().join("crates")).unwrap() {
+        let src = entry.unwrap().path().join("src");
+        let rel = src.strip_prefix(workspace()).unwrap();
+        if src.is_dir() && !ROOTS.iter().any(|r| Path::new(r) == rel) {
+            missing.push(rel.display().to_string());
+        }
+    }
+    assert!(missing.is_empty(), "not in ROOTS: {missing:?}");
+}
+
+#[test]
 fn no_crate_has_a_module_cycle() {
     let found: Vec<String> = ROOTS
         .iter()
@@ -307,7 +322,13 @@ fn no_source_file_is_over_700_lines() {
     for r in ROOTS {
         rust_files(&workspace().join(r), &mut files);
     }
-    for extra in ["tests", "benches", "crates/core/tests", "crates/ffi/tests"] {
+    for extra in [
+        "tests",
+        "benches",
+        "crates/core/tests",
+        "crates/pictures/tests",
+        "crates/ffi/tests",
+    ] {
         rust_files(&workspace().join(extra), &mut files);
     }
     let long: Vec<String> = files

@@ -18,7 +18,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use brdf_atlas_core::render::read_sidecar;
+use brdf_atlas_pictures::map_picture::read_sidecar;
 use brdf_merl::MerlFile;
 use common::{binaries, brdf_atlas, fit, header_dims, map, point_after_at, reported, texts};
 

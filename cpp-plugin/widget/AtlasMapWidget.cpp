@@ -29,8 +29,8 @@ float srgb(float v) {
 QString errorText(const std::exception &e) { return QString::fromUtf8(e.what()); }
 
 // How far a pixel of predictive variance v is faded towards kFadeGrey: the
-// rule of `brdf-atlas map` (brdf_atlas_core::render::fade), 0 up to the
-// library's low-confidence threshold, rising linearly to kFadeMax at 1.
+// rule of `brdf-atlas map` (brdf_atlas_pictures::map_picture::fade), 0 up to
+// the library's low-confidence threshold, rising linearly to kFadeMax at 1.
 constexpr float kFadeGrey = 0.2f;
 constexpr float kFadeMax = 0.75f;
 

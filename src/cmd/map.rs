@@ -9,8 +9,8 @@ use std::time::Instant;
 
 use brdf_atlas_core::Model;
 use brdf_atlas_core::limits::MAX_MAP_SIDE;
-use brdf_atlas_core::render::{self, Picture, Style};
 use brdf_atlas_core::{AlbedoMethod, BlendRule, DEFAULT_SAMPLES, LOW_CONFIDENCE_VARIANCE, View};
+use brdf_atlas_pictures::map_picture::{self, Picture, Style};
 use brdf_atomic::commit_all;
 
 use crate::args;
@@ -202,11 +202,11 @@ pub fn draw(model: &Model, args: &Args, report: &mut impl Write) -> Result<(), E
     let picture = Picture::styled(model, map, args.contours as usize, style);
     let sidecar = picture.sidecar(model.path());
     // Every output is complete on disk before any replaces an old one.
-    let mut staged = vec![render::stage_png(&args.png, &picture)?];
+    let mut staged = vec![map_picture::stage_png(&args.png, &picture)?];
     if let Some(exr) = &args.exr {
-        staged.push(render::stage_exr(exr, &picture.map)?);
+        staged.push(map_picture::stage_exr(exr, &picture.map)?);
     }
-    staged.push(render::stage_sidecar(&json, &sidecar)?);
+    staged.push(map_picture::stage_sidecar(&json, &sidecar)?);
     commit_all(staged)?;
     writeln!(
         report,

@@ -6,8 +6,9 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
-use brdf_atlas_core::swatch::{DEFAULT_LIGHTS, Light};
-use brdf_atlas_core::{BlendRule, Model, View, sheet};
+use brdf_atlas_core::{BlendRule, Model, View};
+use brdf_atlas_pictures::sphere::{DEFAULT_LIGHTS, Light};
+use brdf_atlas_pictures::swatch_sheet;
 use brdf_atomic::commit_all;
 
 use crate::args;
@@ -129,7 +130,7 @@ pub fn run(args: &Args) -> Result<ExitCode, Error> {
     let (points, names, columns) = if args.materials.is_empty() {
         let grid = args.grid as usize;
         let view = args.view.unwrap_or_default();
-        (sheet::grid_points(&view, grid), None, grid)
+        (swatch_sheet::grid_points(&view, grid), None, grid)
     } else {
         let latent = model.latent();
         let mut points = Vec::new();
@@ -152,12 +153,13 @@ pub fn run(args: &Args) -> Result<ExitCode, Error> {
     };
     let t0 = Instant::now();
     let size = args.size as usize;
-    let spheres = sheet::swatches(&model, &points, names.as_deref(), size, lights, args.blend)?;
-    let laid = sheet::compose(&spheres, columns);
+    let spheres =
+        swatch_sheet::swatches(&model, &points, names.as_deref(), size, lights, args.blend)?;
+    let laid = swatch_sheet::compose(&spheres, columns);
     let elapsed = t0.elapsed();
-    let mut staged = vec![sheet::stage_png(&args.png, &laid)?];
+    let mut staged = vec![swatch_sheet::stage_png(&args.png, &laid)?];
     if let Some(exr) = &args.exr {
-        staged.push(sheet::stage_exr(exr, &laid)?);
+        staged.push(swatch_sheet::stage_exr(exr, &laid)?);
     }
     commit_all(staged)?;
     let mut out = io::stdout().lock();

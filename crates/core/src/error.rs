@@ -85,21 +85,24 @@ pub enum CoreError {
 }
 
 impl CoreError {
-    pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+    /// [`CoreError::Io`] of `path`.
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         CoreError::Io {
             path: path.into(),
             source,
         }
     }
 
-    pub(crate) fn write(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+    /// [`CoreError::Write`] of `path`.
+    pub fn write(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         CoreError::Write {
             path: path.into(),
             source,
         }
     }
 
-    pub(crate) fn bad_file(path: impl Into<PathBuf>, why: impl Into<String>) -> Self {
+    /// [`CoreError::BadFile`] of `path`, saying `why`.
+    pub fn bad_file(path: impl Into<PathBuf>, why: impl Into<String>) -> Self {
         CoreError::BadFile {
             path: path.into(),
             why: why.into(),

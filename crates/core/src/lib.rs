@@ -15,7 +15,8 @@
 //!   points ([`fidelity`]);
 //! - `query`: what a model answers: a material at a latent point
 //!   ([`Blend`]), where a new material lands ([`Located`]), albedo maps
-//!   ([`AlbedoMap`]), their contours and pictures ([`render`]);
+//!   ([`AlbedoMap`]) and their contours ([`contours`]; their pictures are
+//!   drawn by the `brdf-atlas-pictures` crate);
 //! - `eval`: leave-one-out errors ([`loo`]) and how each material comes
 //!   back at its own point and left out ([`fidelity`]);
 //! - [`simd`]: the vectorised kernels the hot loops share (CPU features are
@@ -63,7 +64,7 @@ pub use query::{
     LATTICE_TOLERANCE, LOW_CONFIDENCE_VARIANCE, Located, NODE_PHI_D_STEP, Plausibility, Segment,
     View, contour_levels, contours, lattice_path, luminance,
 };
-pub use query::{field, floor, render, sheet, swatch};
+pub use query::{field, floor};
 pub use simd::fastlog;
 
 /// The SIGBUS handler that keeps a store truncated under its map from

@@ -6,9 +6,9 @@
 
 use std::path::{Path, PathBuf};
 
-use brdf_atlas_core::render::Sidecar;
 use brdf_atlas_core::{Model, NoProgress, Store};
 use brdf_atlas_core::{ModelFile, store_path_for};
+use brdf_atlas_pictures::map_picture::Sidecar;
 use brdf_merl::{MerlFile, MerlTable};
 
 /// The MERL reader: `data` as `dir/input.binary`, opened as the tools open

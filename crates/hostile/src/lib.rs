@@ -14,9 +14,9 @@ pub mod fuzz;
 use std::path::{Path, PathBuf};
 
 use brdf_atlas_core::View;
-use brdf_atlas_core::render::{Picture, read_sidecar, write_sidecar};
 use brdf_atlas_core::{FitOptions, fit_dir, store_path_for};
 use brdf_atlas_core::{GplvmParams, Model, NoProgress, Precision, TransformKind};
+use brdf_atlas_pictures::map_picture::{Picture, read_sidecar, write_sidecar};
 use brdf_merl::{Dims, synth};
 use serde_json::{Value, json};
 

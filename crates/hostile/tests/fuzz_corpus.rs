@@ -75,7 +75,7 @@ fn every_broken_sidecar_is_refused_with_a_named_reason() {
     let cases = brdf_atlas_hostile::sidecar_cases(&cases, &good);
     assert!(cases.len() >= 10);
     for c in cases {
-        let e = brdf_atlas_core::render::read_sidecar(&c.path)
+        let e = brdf_atlas_pictures::map_picture::read_sidecar(&c.path)
             .expect_err(&c.label())
             .to_string();
         c.check_message(&e).unwrap();

@@ -14,7 +14,7 @@
 //! reported beside it.
 
 use brdf_atlas_analytic::{Analytic, Fits, fit_as_exported};
-use brdf_atlas_core::swatch::{Light, Reflectance, Sphere, render};
+use brdf_atlas_pictures::sphere::{Light, Reflectance, Sphere, render};
 use brdf_merl::{MerlTable, Vec3};
 use rayon::prelude::*;
 
@@ -150,7 +150,7 @@ pub fn compare(
 mod tests {
     use super::*;
     use brdf_atlas_analytic::Lambertian;
-    use brdf_atlas_core::swatch::DEFAULT_LIGHTS;
+    use brdf_atlas_pictures::sphere::DEFAULT_LIGHTS;
 
     #[test]
     fn a_white_lambertian_facing_a_unit_light_renders_one_and_errors_are_relative() {

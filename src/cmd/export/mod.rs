@@ -10,9 +10,9 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use brdf_atlas_analytic::export::{self, Export, RenderedErrors};
-use brdf_atlas_core::sheet::{self, Swatch};
-use brdf_atlas_core::swatch::{DEFAULT_LIGHTS, Light};
 use brdf_atlas_core::{BlendRule, Model};
+use brdf_atlas_pictures::sphere::{DEFAULT_LIGHTS, Light};
+use brdf_atlas_pictures::swatch_sheet::{self, Swatch};
 use brdf_atomic::{PendingFile, commit_all};
 use brdf_merl::MerlTable;
 
@@ -209,7 +209,7 @@ fn picture(path: &Path, src: &Source, c: &Compared) -> Result<PendingFile, Error
         lines,
         sphere,
     };
-    let sheet = sheet::compose(
+    let sheet = swatch_sheet::compose(
         &[
             cell(
                 vec![src.name.clone(), "measured".into()],
@@ -229,7 +229,7 @@ fn picture(path: &Path, src: &Source, c: &Compared) -> Result<PendingFile, Error
         ],
         3,
     );
-    Ok(sheet::stage_png(path, &sheet)?)
+    Ok(swatch_sheet::stage_png(path, &sheet)?)
 }
 
 /// Stage the five files of one material: the analytic crate's four

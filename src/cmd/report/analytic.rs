@@ -7,7 +7,7 @@ use std::io::{self, Write};
 use std::path::Path;
 
 use brdf_atlas_core::Dataset;
-use brdf_atlas_core::swatch::DEFAULT_LIGHTS;
+use brdf_atlas_pictures::sphere::DEFAULT_LIGHTS;
 use rayon::prelude::*;
 
 use super::results::{AnalyticRow, Results};

@@ -16,7 +16,7 @@ use super::write_file;
 use crate::error::Error;
 
 /// The font the map pictures draw with too (embedded once, in the core).
-static FONT: &[u8] = brdf_atlas_core::render::FONT;
+static FONT: &[u8] = brdf_atlas_pictures::FONT;
 
 const WIDTH: u32 = 720;
 const HEIGHT: u32 = 440;

@@ -1,4 +1,4 @@
-//! Swatch sheets: lit spheres ([`super::swatch`]) of the materials at a
+//! Swatch sheets: lit spheres ([`crate::sphere`]) of the materials at a
 //! grid of latent points (or at named materials), laid out in rows with
 //! their latent coordinates under each, as a tone-mapped sRGB PNG (text in
 //! the map's font) and a linear float EXR. Written atomically, like maps.
@@ -6,14 +6,11 @@
 use std::io::Cursor;
 use std::path::Path;
 
+use brdf_atlas_core::{BlendRule, CoreError, Model, Result, View};
 use brdf_atomic::{PendingFile, stage};
 
-use crate::error::{CoreError, Result};
-use crate::model::Model;
-use crate::query::BlendRule;
-use crate::query::map::View;
-use crate::query::paint::{Canvas, srgb, text_size};
-use crate::query::swatch::{Light, Sphere, render, tone};
+use crate::canvas::{Canvas, srgb, text_size};
+use crate::sphere::{Light, Sphere, render, tone};
 
 /// Space around a sphere, pixels.
 const PAD: usize = 6;

@@ -11,10 +11,9 @@
 //! is `sum over lights of f(wi, wo) pi E (n . l)`, so a light of intensity
 //! `E = 1` makes a white Lambertian surface facing it exactly 1.
 
+use brdf_atlas_core::Blend;
 use brdf_merl::{MerlTable, Vec3};
 use rayon::prelude::*;
-
-use crate::query::reconstruct::Blend;
 
 /// A material a sphere can be rendered from.
 pub trait Reflectance: Sync {

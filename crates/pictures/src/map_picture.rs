@@ -9,17 +9,15 @@
 use std::io::Cursor;
 use std::path::Path;
 
+use brdf_atlas_core::{
+    AlbedoMap, CoreError, LOW_CONFIDENCE_VARIANCE, Model, Result, Segment, contour_levels,
+    contours, luminance,
+};
 use brdf_atomic::{PendingFile, stage};
 
-use crate::error::{CoreError, Result};
-use crate::model::Model;
-use crate::query::contour::{Segment, contour_levels, contours, luminance};
-use crate::query::map::AlbedoMap;
-pub use crate::query::overlay::{Label, MIN_DECORATED_SIDE, Overlay, Style};
-pub use crate::query::paint::FONT;
-use crate::query::paint::{Canvas, srgb};
-use crate::query::plausibility::LOW_CONFIDENCE_VARIANCE;
-pub use crate::query::sidecar::{
+use crate::canvas::{Canvas, srgb};
+pub use crate::overlay::{Label, MIN_DECORATED_SIDE, Overlay, Style};
+pub use crate::sidecar::{
     ConfidenceRule, LabelBox, MAX_SIDE, Reference, SIDECAR_VERSION, Sidecar, read_sidecar,
 };
 

@@ -6,11 +6,11 @@
 
 use std::path::{Path, PathBuf};
 
-use brdf_atlas_core::render::{self, FADE_GREY, Picture, Style, fade};
 use brdf_atlas_core::{
     FitOptions, GplvmParams, LOW_CONFIDENCE_VARIANCE, Model, NoProgress, Precision, TransformKind,
     View, fit_dir,
 };
+use brdf_atlas_pictures::map_picture::{self, FADE_GREY, Picture, Style, fade};
 use brdf_merl::{Dims, synth};
 
 const DIMS: Dims = Dims {
@@ -43,8 +43,8 @@ fn check_labels(model: &Model, side: usize, dir: &Path) -> (usize, usize) {
         .unwrap();
     let picture = Picture::new(model, map, 8);
     let json = dir.join(format!("map-{side}.json"));
-    render::write_sidecar(&json, &picture.sidecar(model.path())).unwrap();
-    let sidecar = render::read_sidecar(&json).unwrap();
+    map_picture::write_sidecar(&json, &picture.sidecar(model.path())).unwrap();
+    let sidecar = map_picture::read_sidecar(&json).unwrap();
     let labels = &sidecar.labels;
     let visible: Vec<_> = sidecar
         .references
@@ -238,7 +238,7 @@ fn variance_matches_a_dense_recomputation_and_the_fade_follows_the_rule() {
 
     // The EXR's fourth channel is the variance.
     let exr = dir.path().join("map.exr");
-    render::write_exr(&exr, &map).unwrap();
+    map_picture::write_exr(&exr, &map).unwrap();
     let image = exr::prelude::read_first_flat_layer_from_file(&exr).unwrap();
     let channel = image
         .layer_data

@@ -10,7 +10,7 @@
 //! then rings of sixteen positions at growing distances joined to the dot
 //! by a leader; the first position that is free wins.
 
-use super::paint::{Rect, overlaps};
+use crate::canvas::{Rect, overlaps};
 
 /// A label that found room.
 #[derive(Debug, Clone, PartialEq)]

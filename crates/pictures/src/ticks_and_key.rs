@@ -3,8 +3,9 @@
 //! some materials could not be labelled. Each piece is laid out first (its
 //! box reserved, so labels keep clear of it), then drawn.
 
-use super::map::View;
-use super::paint::{Canvas, Rect, overlaps, srgb, text_size};
+use brdf_atlas_core::View;
+
+use crate::canvas::{Canvas, Rect, overlaps, srgb, text_size};
 
 /// Ink of the decorations and labels (sRGB-encoded, as the canvas).
 pub const INK: [f32; 3] = [0.02, 0.02, 0.02];

@@ -2,9 +2,10 @@
 //! sphere rendered from a model's point queries equals the one rendered
 //! from the MERL file of that point's reconstruction.
 
-use brdf_atlas_core::swatch::{Light, render};
-use brdf_atlas_core::{BlendRule, fit_dir, sheet};
+use brdf_atlas_core::{BlendRule, fit_dir};
 use brdf_atlas_core::{FitOptions, GplvmParams, Model, NoProgress, Precision, TransformKind};
+use brdf_atlas_pictures::sphere::{Light, render};
+use brdf_atlas_pictures::swatch_sheet;
 use brdf_merl::table::raw_from_physical;
 use brdf_merl::{Dims, MerlTable, synth};
 
@@ -97,7 +98,7 @@ fn a_sphere_from_point_queries_equals_the_one_from_the_reconstructed_file() {
     );
     let x = [0.31, -0.27];
     let blend = model.at(&x).unwrap();
-    let lights = brdf_atlas_core::swatch::DEFAULT_LIGHTS;
+    let lights = brdf_atlas_pictures::sphere::DEFAULT_LIGHTS;
     let from_model = render(&blend, 48, &lights);
     let merl = dir.path().join("there.binary");
     blend.table().unwrap().write(&merl).unwrap();
@@ -107,15 +108,16 @@ fn a_sphere_from_point_queries_equals_the_one_from_the_reconstructed_file() {
 
     // A sheet lays the grid out row by row from the top left of the view.
     let view = brdf_atlas_core::View::default();
-    let points = sheet::grid_points(&view, 3);
+    let points = swatch_sheet::grid_points(&view, 3);
     assert_eq!(points.len(), 9);
     assert!(points[0][0] < points[1][0] && points[0][1] > points[3][1]);
-    let spheres = sheet::swatches(&model, &points[..2], None, 16, &lights, BlendRule::Gp).unwrap();
+    let spheres =
+        swatch_sheet::swatches(&model, &points[..2], None, 16, &lights, BlendRule::Gp).unwrap();
     assert_eq!(
         spheres[0].lines,
         [format!("({:.2}, {:.2})", points[0][0], points[0][1])]
     );
-    let laid = sheet::compose(&spheres, 2);
+    let laid = swatch_sheet::compose(&spheres, 2);
     assert_eq!(laid.srgb8.len(), 3 * laid.width * laid.height);
     assert!(laid.width >= 32 && laid.height >= 16);
 }
@@ -130,9 +132,10 @@ fn plausible_swatches_are_the_spheres_of_the_plausible_reconstructions() {
         7,
         Precision::F64,
     );
-    let lights = brdf_atlas_core::swatch::DEFAULT_LIGHTS;
-    let points = sheet::grid_points(&brdf_atlas_core::View::default(), 3);
-    let sheet = sheet::swatches(&model, &points, None, 24, &lights, BlendRule::Plausible).unwrap();
+    let lights = brdf_atlas_pictures::sphere::DEFAULT_LIGHTS;
+    let points = swatch_sheet::grid_points(&brdf_atlas_core::View::default(), 3);
+    let sheet =
+        swatch_sheet::swatches(&model, &points, None, 24, &lights, BlendRule::Plausible).unwrap();
     let mut differ = 0;
     for (p, s) in points.iter().zip(&sheet) {
         let alone = model.at_with(p, BlendRule::Plausible).unwrap();

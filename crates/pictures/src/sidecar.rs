@@ -5,11 +5,9 @@
 
 use std::path::Path;
 
+use brdf_atlas_core::limits::{LATENT_LIMIT, MAX_MATERIALS, MAX_SIDECAR_SIDE};
+use brdf_atlas_core::{AlbedoMethod, CoreError, Result, View};
 use serde::{Deserialize, Serialize};
-
-use crate::error::{CoreError, Result};
-use crate::limits::{LATENT_LIMIT, MAX_MATERIALS};
-use crate::query::map::{AlbedoMethod, View};
 
 /// An input material drawn on the map.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -88,7 +86,7 @@ pub struct ConfidenceRule {
 /// version 1 (without labels and confidence).
 pub const SIDECAR_VERSION: u32 = 2;
 /// Largest width or height a sidecar may give.
-pub const MAX_SIDE: usize = crate::limits::MAX_SIDECAR_SIDE;
+pub const MAX_SIDE: usize = MAX_SIDECAR_SIDE;
 
 /// Read and check a sidecar.
 pub fn read_sidecar(path: &Path) -> Result<Sidecar> {

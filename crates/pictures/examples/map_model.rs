@@ -1,9 +1,8 @@
 //! Render a model's albedo map:
-//! `cargo run --release -p brdf-atlas-core --example map_model -- MODEL OUT.png [SIZE] [SAMPLES]`.
+//! `cargo run --release -p brdf-atlas-pictures --example map_model -- MODEL OUT.png [SIZE] [SAMPLES]`.
 
-use brdf_atlas_core::View;
-use brdf_atlas_core::render::{Picture, write_png};
-use brdf_atlas_core::{Model, NoProgress};
+use brdf_atlas_core::{Model, NoProgress, View};
+use brdf_atlas_pictures::map_picture::{Picture, write_png};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();

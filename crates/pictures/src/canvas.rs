@@ -3,17 +3,17 @@
 //! blended), anti-aliased lines, soft discs,
 //! rectangles, and antialiased text in DejaVu Sans.
 //!
-//! The font is the one the report's plots use (`assets/DejaVuSans.ttf`,
-//! Bitstream Vera licence in `assets/DejaVuSans-LICENSE.txt`), embedded once
-//! here as [`FONT`] and rasterised with ab_glyph, so no system font library
-//! is needed.
+//! The font is the one the report's plots use (`assets/DejaVuSans.ttf` in
+//! this crate, Bitstream Vera licence in `assets/DejaVuSans-LICENSE.txt`),
+//! embedded once here as [`FONT`] and rasterised with ab_glyph, so no system
+//! font library is needed.
 
 use std::sync::OnceLock;
 
 use ab_glyph::{Font, FontRef, PxScale, ScaleFont, point};
 
 /// DejaVu Sans, the TrueType bytes (the report's plots register the same bytes).
-pub static FONT: &[u8] = include_bytes!("../../../../assets/DejaVuSans.ttf");
+pub static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 
 /// The parsed [`FONT`]; `None` if the embedded bytes did not parse (then
 /// text is measured as empty and not drawn: pictures lose their words, never

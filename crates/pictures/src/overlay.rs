@@ -1,13 +1,14 @@
 //! Everything a map picture draws over the albedo: the materials' dots, their
-//! labels ([`super::labels`]), the axis ticks and the colour key
-//! ([`super::decor`]), and a note on what could not be labelled. Laid out
+//! labels ([`crate::labels`]), the axis ticks and the colour key
+//! ([`crate::ticks_and_key`]), and a note on what could not be labelled. Laid out
 //! once, so the PNG and the sidecar's label boxes come from the same layout.
 
-use super::decor::{self, INK, Key, Tick};
-use super::labels::{self, dot_box};
-use super::paint::{Canvas, Rect, text_size};
-use super::sidecar::{LabelBox, Reference};
-use crate::query::map::View;
+use brdf_atlas_core::View;
+
+use crate::canvas::{Canvas, Rect, text_size};
+use crate::labels::{self, dot_box};
+use crate::sidecar::{LabelBox, Reference};
+use crate::ticks_and_key::{self, INK, Key, Tick};
 
 /// What a picture shows besides the map and its contours.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -92,12 +93,12 @@ impl Overlay {
             .collect();
         let decorated = style.key && width.min(height) >= MIN_DECORATED_SIDE;
         let ticks = if decorated {
-            decor::axis_ticks(view, width, height, px, &dots)
+            ticks_and_key::axis_ticks(view, width, height, px, &dots)
         } else {
             Vec::new()
         };
         let key = if decorated {
-            decor::key(range, levels, width, height, px, &dots, &ticks)
+            ticks_and_key::key(range, levels, width, height, px, &dots, &ticks)
         } else {
             None
         };
@@ -142,7 +143,7 @@ impl Overlay {
                 .filter(|t| t.mark[0][0] <= 0.5)
                 .map(|t| t.rect[2])
                 .fold(0.0f32, f32::max);
-            let rect = decor::note_box(&widest, width, px, left, &dots, &reserved);
+            let rect = ticks_and_key::note_box(&widest, width, px, left, &dots, &reserved);
             reserved.push(rect);
             layout = labels::place(&centres, &sizes, DOT, bounds, &reserved);
             let text = note_text(layout.left_out.len(), visible.len());
@@ -178,9 +179,9 @@ impl Overlay {
 
     /// Draw the overlay: ticks and key, every dot, then labels and note.
     pub fn draw(&self, canvas: &mut Canvas, references: &[Reference]) {
-        decor::draw_ticks(canvas, &self.ticks, self.px);
+        ticks_and_key::draw_ticks(canvas, &self.ticks, self.px);
         if let Some(key) = &self.key {
-            decor::draw_key(canvas, key, self.px);
+            ticks_and_key::draw_key(canvas, key, self.px);
         }
         for r in references {
             let (cx, cy) = (r.pixel[0] as f32, r.pixel[1] as f32);
@@ -191,10 +192,10 @@ impl Overlay {
             if let Some([a, b]) = l.leader {
                 canvas.line(a, b, INK, 0.8);
             }
-            decor::draw_text_box(canvas, l.rect, &references[l.index].name, self.px);
+            ticks_and_key::draw_text_box(canvas, l.rect, &references[l.index].name, self.px);
         }
         if let Some((text, rect)) = &self.note {
-            decor::draw_text_box(canvas, *rect, text, self.px);
+            ticks_and_key::draw_text_box(canvas, *rect, text, self.px);
         }
     }
 }
