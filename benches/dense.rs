@@ -5,18 +5,20 @@
 //! them), the optimiser's refactorisation (Cholesky and inverse of an
 //! N x N kernel matrix, N = 100 to 1000; about 1 700 per 100-material fit),
 //! and the N x N product of L-BFGS's gradient (`K^-1 Y K^-1`, two a cost
-//! evaluation) on one thread and on the default pool. faer is here for scale
-//! only: the library does not call it at run time (see the `dense`
+//! evaluation) on one thread and on the default pool, and the symmetric
+//! eigen-decomposition of PCA's Gram matrix (N = 100 to 1000). faer is here
+//! for scale (its default, parallel, high-level call); the library calls
+//! faer at run time only for the eigen-decomposition (see the `dense`
 //! module).
 //!
 //! Run with `cargo bench --bench dense`.
 
 use std::hint::black_box;
 
-use brdf_atlas_core::dense::Cholesky;
 use brdf_atlas_core::dense::gram::syrk_lower_add;
 use brdf_atlas_core::dense::gram32::syrk_lower_add_f32;
 use brdf_atlas_core::dense::product::matmul;
+use brdf_atlas_core::dense::{Cholesky, symmetric_eigen};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use faer::linalg::matmul::triangular::{self as tri, BlockStructure};
 use faer::linalg::solvers::DenseSolveCore;
@@ -131,6 +133,33 @@ fn product(c: &mut Criterion) {
     g.finish();
 }
 
+/// A Gram matrix `Z Z^T` of `n` random points in `2 n` dimensions, as
+/// PCA decomposes.
+fn gram_matrix(n: usize) -> Mat<f64> {
+    let z = random(n * 2 * n);
+    let z = MatRef::from_column_major_slice(&z, n, 2 * n);
+    z * z.transpose()
+}
+
+fn eigen(c: &mut Criterion) {
+    let mut g = c.benchmark_group("symmetric eigen");
+    g.sample_size(10);
+    for n in [N, 400, 1000] {
+        let y = gram_matrix(n);
+        g.bench_with_input(BenchmarkId::new("dense::symmetric_eigen", n), &n, |b, _| {
+            b.iter(|| black_box(symmetric_eigen(black_box(y.as_ref())).unwrap()));
+        });
+        g.bench_with_input(
+            BenchmarkId::new("faer self_adjoint_eigen", n),
+            &n,
+            |b, _| {
+                b.iter(|| black_box(black_box(&y).self_adjoint_eigen(Side::Lower).unwrap()));
+            },
+        );
+    }
+    g.finish();
+}
+
 /// The shape of a reconstruction or clamp pass at a few latent points: the
 /// points' weights (`m x 100`) times a block of 4096 store rows (`100 x
 /// 4096`), on one thread.
@@ -155,6 +184,6 @@ fn few_points(c: &mut Criterion) {
 criterion_group! {
     name = benches;
     config = Criterion::default().sample_size(20);
-    targets = gram, refactorise, product, few_points
+    targets = gram, refactorise, product, few_points, eigen
 }
 criterion_main!(benches);

@@ -1,197 +1,149 @@
-//! Eigen-decomposition of a small symmetric matrix: Householder reduction
-//! to tridiagonal form, then implicit QR steps with Wilkinson shifts.
+//! Eigen-decomposition of a symmetric matrix: faer's (Householder
+//! reduction to tridiagonal form, then implicit QR steps below 128 rows and
+//! divide and conquer from 128), on the calling thread only (`Par::Seq`),
+//! so the result does not depend on the thread count. faer picks its SIMD
+//! path (and fused multiply-adds) for the CPU at run time, so the last bits
+//! may differ from one CPU to another.
 //!
-//! The reduction applies `H_k = I - beta v v^T` from both sides for each
-//! column, keeping the matrix full (column-major, so every inner loop is a
-//! contiguous dot product or AXPY), and forms `Q = H_0 H_1 ...` from the
-//! last reflection back. Each QR step chases a bulge down the unreduced
-//! block with plane rotations, applied to the columns of the eigenvector
-//! matrix; an off-diagonal entry below `eps (|d_i| + |d_i+1|)` is set to
-//! zero (deflation). About `9 N^3` flops; sequential, in a fixed order, no
-//! fused multiply-adds: the same bits on every CPU and thread count.
+//! On top of faer's result this module checks the input and the output for
+//! values that are not finite and fixes each eigenvector's sign.
 
-use faer::{Mat, MatRef};
-
-use crate::simd::dot::{axpy, dot};
-
-/// QR steps allowed per eigenvalue on average before giving up (two or
-/// three are typical).
-const MAX_STEPS_PER_VALUE: usize = 30;
+use faer::diag::Diag;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::evd::{self, ComputeEigenvectors};
+use faer::{Mat, MatRef, Par};
 
 /// Eigenvalues in ascending order and the eigenvectors as columns, in the
-/// same order; `None` when the matrix holds a value that is not finite, or
-/// the iteration does not converge. Reads the lower triangle of `a`.
+/// same order, each with its largest-magnitude entry positive (the last
+/// such entry on a tie); `None` when the matrix holds a value that is not
+/// finite, the iteration does not converge or its scratch cannot be
+/// allocated. Reads the lower triangle of the leading square block of `a`.
 pub fn symmetric_eigen(a: MatRef<'_, f64>) -> Option<(Vec<f64>, Mat<f64>)> {
     let n = a.nrows().min(a.ncols());
-    // Column-major, full (mirrored from the lower triangle).
-    let mut m = vec![0.0f64; n * n];
-    for j in 0..n {
-        for i in j..n {
-            let v = a[(i, j)];
-            if !v.is_finite() {
-                return None;
-            }
-            m[j * n + i] = v;
-            m[i * n + j] = v;
-        }
-    }
-    let (mut d, mut e, mut z) = tridiagonalise(&mut m, n);
-    if !d.iter().chain(&e).all(|v| v.is_finite()) {
+    let a = a.submatrix(0, 0, n, n);
+    if !(0..n).all(|j| (j..n).all(|i| a[(i, j)].is_finite())) {
         return None;
     }
-    implicit_qr(&mut d, &mut e, &mut z, n)?;
+    if n == 0 {
+        return Some((Vec::new(), Mat::zeros(0, 0)));
+    }
+    let (mut s, mut u) = (Diag::<f64>::zeros(n), Mat::<f64>::zeros(n, n));
+    let scratch = evd::self_adjoint_evd_scratch::<f64>(
+        n,
+        ComputeEigenvectors::Yes,
+        Par::Seq,
+        Default::default(),
+    );
+    let mut mem = MemBuffer::try_new(scratch).ok()?;
+    evd::self_adjoint_evd(
+        a,
+        s.as_mut(),
+        Some(u.as_mut()),
+        Par::Seq,
+        MemStack::new(&mut mem),
+        Default::default(),
+    )
+    .ok()?;
+    let values: Vec<f64> = s.column_vector().iter().copied().collect();
+    let finite = values.iter().all(|v| v.is_finite())
+        && (0..n).all(|j| u.col(j).iter().all(|v| v.is_finite()));
+    if !finite {
+        return None;
+    }
+    // faer returns them in nondecreasing order; sort (stably) in case.
     let mut order: Vec<usize> = (0..n).collect();
-    order.sort_by(|&x, &y| d[x].total_cmp(&d[y]).then(x.cmp(&y)));
-    let values = order.iter().map(|&k| d[k]).collect();
-    let vectors = Mat::from_fn(n, n, |i, c| z[order[c] * n + i]);
-    Some((values, vectors))
+    order.sort_by(|&x, &y| values[x].total_cmp(&values[y]));
+    let values = order.iter().map(|&k| values[k]).collect();
+    let vectors = Mat::from_fn(n, n, |i, c| u[(i, order[c])]);
+    Some((values, canonical_signs(vectors)))
 }
 
-/// Reduce the full symmetric `m` (column-major, destroyed) to tridiagonal
-/// form: its diagonal, its off-diagonal (`e[i]` couples `i` and `i + 1`)
-/// and `Q` (column-major) with `m = Q T Q^T`.
-fn tridiagonalise(m: &mut [f64], n: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
-    let mut e = vec![0.0f64; n.saturating_sub(1)];
-    // (v, beta) of each reflection, v over rows k + 1..n.
-    let mut reflections: Vec<(Vec<f64>, f64)> = Vec::with_capacity(n);
-    let (mut p, mut w) = (vec![0.0f64; n], vec![0.0f64; n]);
-    for k in 0..n.saturating_sub(2) {
-        let len = n - k - 1;
-        let x = &m[k * n + k + 1..(k + 1) * n];
-        let sigma = dot(x, x).sqrt();
-        if sigma == 0.0 {
-            reflections.push((Vec::new(), 0.0));
-            continue;
-        }
-        let alpha = if x[0] > 0.0 { -sigma } else { sigma };
-        let mut v = x.to_vec();
-        v[0] -= alpha;
-        let beta = 2.0 / dot(&v, &v);
-        e[k] = alpha;
-        // p = beta A22 v, A22 = m[k+1.., k+1..] (full, symmetric).
-        let (p, w) = (&mut p[..len], &mut w[..len]);
-        p.iter_mut().for_each(|x| *x = 0.0);
-        for (j, vj) in v.iter().enumerate() {
-            let col = (k + 1 + j) * n + k + 1;
-            axpy(*vj, &m[col..col + len], p);
-        }
-        p.iter_mut().for_each(|x| *x *= beta);
-        // w = p - (beta / 2) (p . v) v, then A22 -= v w^T + w v^T.
-        let half = 0.5 * beta * dot(p, &v);
-        for ((wi, pi), vi) in w.iter_mut().zip(p.iter()).zip(&v) {
-            *wi = pi - half * vi;
-        }
-        for j in 0..len {
-            let col = (k + 1 + j) * n + k + 1;
-            let col = &mut m[col..col + len];
-            axpy(-w[j], &v, col);
-            axpy(-v[j], w, col);
-        }
-        reflections.push((v, beta));
-    }
-    if n >= 2 {
-        e[n - 2] = m[(n - 2) * n + n - 1];
-    }
-    let d = (0..n).map(|i| m[i * n + i]).collect();
-    // Q = H_0 (H_1 (... I)): each H_k touches rows and columns k + 1.. only.
-    let mut q = vec![0.0f64; n * n];
-    for i in 0..n {
-        q[i * n + i] = 1.0;
-    }
-    for (k, (v, beta)) in reflections.iter().enumerate().rev() {
-        if v.is_empty() {
-            continue;
-        }
-        for j in k + 1..n {
-            let col = &mut q[j * n + k + 1..(j + 1) * n];
-            let s = beta * dot(v, col);
-            axpy(-s, v, col);
+/// Each column negated if need be so its largest-magnitude entry (the last
+/// one, on a tie) is positive.
+fn canonical_signs(mut v: Mat<f64>) -> Mat<f64> {
+    for c in 0..v.ncols() {
+        let col = v.col(c);
+        let pivot = (0..col.nrows())
+            .max_by(|&a, &b| col[a].abs().total_cmp(&col[b].abs()))
+            .unwrap_or(0);
+        if col.nrows() > 0 && col[pivot] < 0.0 {
+            v.col_mut(c).iter_mut().for_each(|x| *x = -*x);
         }
     }
-    (d, e, q)
-}
-
-/// Diagonalise the tridiagonal `(d, e)`, applying every rotation to the
-/// columns of `z` (column-major `n x n`); `None` if it does not converge.
-fn implicit_qr(d: &mut [f64], e: &mut [f64], z: &mut [f64], n: usize) -> Option<()> {
-    let mut steps = 0usize;
-    let mut hi = n.saturating_sub(1);
-    while hi > 0 {
-        // Deflate: zero the negligible couplings, find the unreduced block
-        // [lo, hi] ending lowest.
-        for i in 0..hi {
-            if e[i].abs() <= f64::EPSILON * (d[i].abs() + d[i + 1].abs()) {
-                e[i] = 0.0;
-            }
-        }
-        while hi > 0 && e[hi - 1] == 0.0 {
-            hi -= 1;
-        }
-        if hi == 0 {
-            break;
-        }
-        let mut lo = hi - 1;
-        while lo > 0 && e[lo - 1] != 0.0 {
-            lo -= 1;
-        }
-        steps += 1;
-        if steps > MAX_STEPS_PER_VALUE * n {
-            return None;
-        }
-        // Wilkinson shift: the eigenvalue of the trailing 2 x 2 nearer d[hi].
-        let (a, b, c) = (d[hi - 1], e[hi - 1], d[hi]);
-        let t = 0.5 * (a - c);
-        let r = t.hypot(b);
-        let mu = c - b * b / (t + if t < 0.0 { -r } else { r });
-        let mut bulge = 0.0;
-        for k in lo..hi {
-            let (x, y) = if k == lo {
-                (d[lo] - mu, e[lo])
-            } else {
-                (e[k - 1], bulge)
-            };
-            let r = x.hypot(y);
-            let (cs, sn) = if r == 0.0 { (1.0, 0.0) } else { (x / r, y / r) };
-            if k > lo {
-                e[k - 1] = r;
-            }
-            // T <- G^T T G on rows and columns k, k + 1.
-            let (a, b, c) = (d[k], e[k], d[k + 1]);
-            let (cc, ss, cs2) = (cs * cs, sn * sn, cs * sn);
-            d[k] = cc * a + 2.0 * cs2 * b + ss * c;
-            d[k + 1] = ss * a - 2.0 * cs2 * b + cc * c;
-            e[k] = cs2 * (c - a) + (cc - ss) * b;
-            if k + 1 < hi {
-                let f = e[k + 1];
-                bulge = sn * f;
-                e[k + 1] = cs * f;
-            }
-            let (left, right) = z.split_at_mut((k + 1) * n);
-            let (zk, zk1) = (&mut left[k * n..], &mut right[..n]);
-            for (p, q) in zk.iter_mut().zip(zk1.iter_mut()) {
-                let (u, v) = (*p, *q);
-                *p = cs * u + sn * v;
-                *q = cs * v - sn * u;
-            }
-        }
-        if !(d[lo..=hi].iter().chain(&e[lo..hi]).all(|v| v.is_finite())) {
-            return None;
-        }
-    }
-    Some(())
+    v
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use brdf_merl::synth::SplitMix64;
-    use faer::Side;
 
-    fn check(a: &Mat<f64>) {
+    /// Cyclic Jacobi rotations on a full copy of `a` until the off-diagonal
+    /// part is negligible: the eigenvalues ascending and the eigenvectors
+    /// (columns), independent of faer's algorithm.
+    fn jacobi(a: &Mat<f64>) -> (Vec<f64>, Mat<f64>) {
+        let n = a.nrows();
+        // On the matrix scaled to a largest entry of 1, so the sums of
+        // squares below neither overflow nor underflow.
+        let scale = a.norm_max();
+        let scale = if scale > 0.0 { scale } else { 1.0 };
+        let mut m = Mat::from_fn(n, n, |i, j| {
+            (if i >= j { a[(i, j)] } else { a[(j, i)] }) / scale
+        });
+        let mut v = Mat::<f64>::identity(n, n);
+        for _sweep in 0..100 {
+            let off: f64 = (0..n)
+                .flat_map(|j| (0..n).filter(move |&i| i != j).map(move |i| (i, j)))
+                .map(|(i, j)| m[(i, j)] * m[(i, j)])
+                .sum();
+            let diag: f64 = (0..n).map(|i| m[(i, i)] * m[(i, i)]).sum();
+            if off <= (f64::EPSILON * f64::EPSILON) * diag || off == 0.0 {
+                break;
+            }
+            for p in 0..n {
+                for q in p + 1..n {
+                    let apq = m[(p, q)];
+                    if apq == 0.0 {
+                        continue;
+                    }
+                    let theta = (m[(q, q)] - m[(p, p)]) / (2.0 * apq);
+                    let t = theta.signum() / (theta.abs() + theta.hypot(1.0));
+                    let t = if theta == 0.0 { 1.0 } else { t };
+                    let c = 1.0 / (t * t + 1.0).sqrt();
+                    let s = t * c;
+                    for k in 0..n {
+                        let (mkp, mkq) = (m[(k, p)], m[(k, q)]);
+                        m[(k, p)] = c * mkp - s * mkq;
+                        m[(k, q)] = s * mkp + c * mkq;
+                    }
+                    for k in 0..n {
+                        let (mpk, mqk) = (m[(p, k)], m[(q, k)]);
+                        m[(p, k)] = c * mpk - s * mqk;
+                        m[(q, k)] = s * mpk + c * mqk;
+                    }
+                    for k in 0..n {
+                        let (vkp, vkq) = (v[(k, p)], v[(k, q)]);
+                        v[(k, p)] = c * vkp - s * vkq;
+                        v[(k, q)] = s * vkp + c * vkq;
+                    }
+                }
+            }
+        }
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by(|&x, &y| m[(x, x)].total_cmp(&m[(y, y)]));
+        let vals = order.iter().map(|&k| m[(k, k)] * scale).collect();
+        (vals, Mat::from_fn(n, n, |i, c| v[(i, order[c])]))
+    }
+
+    /// `A V = V S`, `V^T V = I`, ascending order and canonical signs, to a
+    /// tolerance of rounding of the largest eigenvalue; the eigenvalues
+    /// against Jacobi's and, where an eigenvalue is well separated from the
+    /// others, its eigenvector too.
+    fn check(a: &Mat<f64>) -> (Vec<f64>, Mat<f64>) {
         let n = a.nrows();
         let (vals, vecs) = symmetric_eigen(a.as_ref()).unwrap();
-        let scale = a.norm_max().max(1e-300);
-        // A V = V S and V^T V = I, to rounding of the largest eigenvalue.
+        assert_eq!((vals.len(), vecs.nrows(), vecs.ncols()), (n, n, n));
+        let scale = a.norm_max();
         let tol = f64::EPSILON * 64.0 * n as f64;
         let av = a * &vecs;
         for c in 0..n {
@@ -204,43 +156,151 @@ mod tests {
         for i in 0..n {
             for j in 0..n {
                 let want = if i == j { 1.0 } else { 0.0 };
-                assert!((vtv[(i, j)] - want).abs() <= tol);
+                assert!((vtv[(i, j)] - want).abs() <= tol, "n = {n}: V^T V");
             }
         }
         assert!(vals.windows(2).all(|w| w[0] <= w[1]));
-        // Against faer's eigenvalues.
-        let reference = a.self_adjoint_eigenvalues(Side::Lower).unwrap();
-        for (g, w) in vals.iter().zip(&reference) {
-            assert!((g - w).abs() <= tol * scale, "{g} vs {w}");
+        for c in 0..n {
+            let col = vecs.col(c);
+            let max = col.iter().map(|x| x.abs()).fold(0.0, f64::max);
+            let last = (0..n).rev().find(|&i| col[i].abs() == max).unwrap();
+            assert!(col[last] > 0.0, "n = {n}: sign of column {c}");
+        }
+        let (want, w) = jacobi(a);
+        for (g, r) in vals.iter().zip(&want) {
+            assert!((g - r).abs() <= tol * scale, "n = {n}: {g:e} vs {r:e}");
+        }
+        for c in 0..n {
+            let gap = (0..n)
+                .filter(|&k| k != c)
+                .map(|k| (want[k] - want[c]).abs())
+                .fold(f64::INFINITY, f64::min);
+            if gap > 1e-6 * scale {
+                let cos: f64 = (0..n).map(|i| vecs[(i, c)] * w[(i, c)]).sum();
+                let err = 1.0 - cos.abs();
+                assert!(err <= 1e3 * tol * scale / gap, "n = {n}: vector {c}");
+            }
+        }
+        (vals, vecs)
+    }
+
+    fn random_gram(rng: &mut SplitMix64, n: usize, d: usize) -> Mat<f64> {
+        let z = Mat::from_fn(n, d, |_, _| rng.range(-1.0, 1.0));
+        &z * z.transpose()
+    }
+
+    #[test]
+    fn decomposes_random_symmetric_and_gram_matrices() {
+        let mut rng = SplitMix64::new(9);
+        // Full-rank Gram matrices on both sides of faer's switch from QR
+        // steps to divide and conquer (128).
+        for (n, d) in [(1, 3), (2, 5), (30, 40), (100, 300), (127, 200), (160, 320)] {
+            check(&random_gram(&mut rng, n, d));
+        }
+        // Indefinite.
+        for n in [3, 50, 140] {
+            let l = Mat::from_fn(n, n, |_, _| rng.range(-1.0, 1.0));
+            check(&Mat::from_fn(n, n, |i, j| l[(i.max(j), i.min(j))]));
         }
     }
 
     #[test]
-    fn decomposes_random_gram_and_degenerate_matrices() {
-        let mut rng = SplitMix64::new(9);
-        for (n, d) in [(1, 3), (2, 5), (5, 2), (30, 40), (100, 300), (64, 8)] {
-            // A Gram matrix Z Z^T (rank min(n, d): degenerate when d < n).
-            let z = Mat::from_fn(n, d, |_, _| rng.range(-1.0, 1.0));
-            check(&(&z * z.transpose()));
+    fn stays_stable_on_hard_cases() {
+        let mut rng = SplitMix64::new(11);
+        // Rank-deficient Gram matrices (rank d < n): n - d eigenvalues at
+        // zero to rounding.
+        for (n, d) in [(5, 2), (64, 8), (150, 10)] {
+            let y = random_gram(&mut rng, n, d);
+            let (vals, _) = check(&y);
+            let top = vals[n - 1];
+            assert!(vals[..n - d].iter().all(|s| s.abs() <= 1e-12 * top));
+            assert!(vals[n - d] > 1e-6 * top);
         }
-        // Repeated eigenvalues, zeros and negatives.
-        check(&Mat::from_fn(6, 6, |i, j| if i == j { 2.0 } else { 0.0 }));
+        // Repeated eigenvalues: a multiple of the identity, zero, and a
+        // matrix with eigenvalue 1 of multiplicity 3 and 4 of multiplicity 2
+        // in a random basis.
+        let (vals, _) = check(&Mat::from_fn(6, 6, |i, j| if i == j { 2.0 } else { 0.0 }));
+        assert!(vals.iter().all(|&s| (s - 2.0).abs() <= 1e-15));
         check(&Mat::<f64>::zeros(4, 4));
+        check(&Mat::<f64>::zeros(130, 130));
+        let basis = symmetric_eigen(random_gram(&mut rng, 5, 9).as_ref())
+            .unwrap()
+            .1;
+        let d = [1.0, 1.0, 1.0, 4.0, 4.0];
+        let a = Mat::from_fn(5, 5, |i, j| {
+            (0..5).map(|k| basis[(i, k)] * d[k] * basis[(j, k)]).sum()
+        });
+        let (vals, _) = check(&a);
+        for (g, w) in vals.iter().zip(&d) {
+            assert!((g - w).abs() <= 1e-14 * 4.0);
+        }
+        // Many equal eigenvalues in divide and conquer's range: a rank-one
+        // update of the identity.
+        let x: Vec<f64> = (0..200).map(|_| rng.range(-1.0, 1.0)).collect();
+        check(&Mat::from_fn(200, 200, |i, j| {
+            x[i] * x[j] + if i == j { 1.0 } else { 0.0 }
+        }));
         check(&Mat::from_fn(
             5,
             5,
             |i, j| if i == j { -(i as f64) } else { 1.0 },
         ));
+        // Tiny and huge scales, and both in one matrix.
+        for scale in [1e-150, 1e-300, 1e150, 1e300] {
+            let y = random_gram(&mut rng, 40, 60);
+            let max = y.norm_max();
+            check(&Mat::from_fn(40, 40, |i, j| y[(i, j)] / max * scale));
+        }
         check(&Mat::from_fn(
             3,
             3,
             |i, j| if i == j { 1e300 } else { 1e-300 },
         ));
+        check(&Mat::from_fn(3, 3, |i, j| {
+            if i == j { [1e-300, 1.0, 1e300][i] } else { 0.0 }
+        }));
+    }
+
+    #[test]
+    fn the_same_bits_on_one_and_two_threads() {
+        let mut rng = SplitMix64::new(5);
+        let y = random_gram(&mut rng, 300, 400);
+        let run = |threads| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| symmetric_eigen(y.as_ref()).unwrap())
+        };
+        let (one, two) = (run(1), run(2));
+        assert!(
+            one.0
+                .iter()
+                .zip(&two.0)
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        );
+        assert!(
+            (0..300).all(|j| (0..300).all(|i| one.1[(i, j)].to_bits() == two.1[(i, j)].to_bits()))
+        );
     }
 
     #[test]
     fn refuses_values_that_are_not_finite() {
-        let a = Mat::from_fn(3, 3, |i, j| if (i, j) == (2, 1) { f64::NAN } else { 1.0 });
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            for n in [3, 200] {
+                let a = Mat::from_fn(n, n, |i, j| if (i, j) == (2, 1) { bad } else { 1.0 });
+                assert!(symmetric_eigen(a.as_ref()).is_none());
+            }
+        }
+        // The upper triangle is not read.
+        let a = Mat::from_fn(3, 3, |i, j| if (i, j) == (1, 2) { f64::NAN } else { 1.0 });
+        assert!(symmetric_eigen(a.as_ref()).is_some());
+        // Finite entries, an eigenvalue that overflows (4 f64::MAX).
+        let a = Mat::from_fn(4, 4, |_, _| f64::MAX);
         assert!(symmetric_eigen(a.as_ref()).is_none());
+        assert_eq!(
+            symmetric_eigen(Mat::<f64>::zeros(0, 0).as_ref()).unwrap().0,
+            Vec::<f64>::new()
+        );
     }
 }

@@ -4,8 +4,10 @@
 //! With `Y = U S U^T`, the principal coordinates of the materials are the
 //! columns `U_k sqrt(s_k)` of the largest eigenvalues. They are scaled by one
 //! common factor (keeping the shape) so the largest coordinate has
-//! magnitude 1, inside the box `[-1, 1]^q`. Eigenvector signs are fixed
-//! (largest-magnitude entry positive) so the start is deterministic.
+//! magnitude 1, inside the box `[-1, 1]^q`. The eigenvectors come with fixed
+//! signs (largest-magnitude entry positive, see
+//! [`symmetric_eigen`](crate::dense::symmetric_eigen)), so the start is
+//! deterministic.
 
 use faer::{Mat, MatRef};
 
@@ -25,12 +27,8 @@ pub fn dual_pca(y: MatRef<'_, f64>, q: usize) -> Result<(Mat<f64>, Vec<f64>)> {
     for c in 0..q {
         let k = n - 1 - c;
         let root = s[k].max(0.0).sqrt();
-        let pivot = (0..n)
-            .max_by(|&a, &b| u[(a, k)].abs().total_cmp(&u[(b, k)].abs()))
-            .unwrap_or(0);
-        let sign = if u[(pivot, k)] < 0.0 { -1.0 } else { 1.0 };
         for i in 0..n {
-            x[(i, c)] = sign * u[(i, k)] * root;
+            x[(i, c)] = u[(i, k)] * root;
         }
     }
     let max = x.as_ref().norm_max();
