@@ -122,9 +122,12 @@ impl Layout {
     fn kernel(&self, v: &[f64]) -> Kernel {
         if self.learn {
             let m = self.n * self.q;
+            // exp(ln(lo)) can round below lo (exp(ln(1e-8)) is
+            // 9.999999999999982e-9): the kernel read back stays in its range.
+            let back = |x: f64, (lo, hi): (f64, f64)| x.exp().clamp(lo, hi);
             Kernel {
-                length_scale: v[m].exp(),
-                noise: v[m + 1].exp(),
+                length_scale: back(v[m], LEARNED_LENGTH_SCALE_RANGE),
+                noise: back(v[m + 1], LEARNED_NOISE_RANGE),
             }
         } else {
             self.kernel
@@ -275,5 +278,37 @@ impl Optimizer for Lbfgs {
             drift: DriftStats::default(),
             history,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_kernel_at_its_bounds_reads_back_inside_them() {
+        // ln and exp do not round-trip: exp(ln(1e-8)) < 1e-8.
+        assert!(LEARNED_NOISE_RANGE.0.ln().exp() < LEARNED_NOISE_RANGE.0);
+        let layout = Layout {
+            n: 1,
+            q: 1,
+            kernel: Kernel::default(),
+            learn: true,
+        };
+        let latent = Mat::zeros(1, 1);
+        let ((l0, l1), (m0, m1)) = (LEARNED_LENGTH_SCALE_RANGE, LEARNED_NOISE_RANGE);
+        for (l, mu) in [(l0, m0), (l0, m1), (l1, m0), (l1, m1)] {
+            let k = Kernel {
+                length_scale: l,
+                noise: mu,
+            };
+            let back = layout.kernel(&layout.pack(&latent, &k));
+            assert!(
+                (LEARNED_LENGTH_SCALE_RANGE.0..=LEARNED_LENGTH_SCALE_RANGE.1)
+                    .contains(&back.length_scale)
+                    && (LEARNED_NOISE_RANGE.0..=LEARNED_NOISE_RANGE.1).contains(&back.noise),
+                "{k:?} read back as {back:?}"
+            );
+        }
     }
 }
