@@ -292,15 +292,17 @@ pub fn write_summary(out: &mut impl Write, args: &Args, fitted: &Fitted) -> io::
             o.iterations, o.evaluations
         )?,
     }
-    let heap = r.peak_heap.map(|p| format!("peak heap {}", size(p as u64)));
     let private = r
         .peak_private
-        .map(|p| format!("peak private {} (VmData)", size(p)));
-    let parts: Vec<String> = heap.into_iter().chain(private).collect();
+        .map(|p| format!("peak resident private {} (RssAnon)", size(p)));
+    let heap = r
+        .peak_heap
+        .map(|p| format!("peak heap {} allocated, touched or not", size(p as u64)));
+    let parts: Vec<String> = private.into_iter().chain(heap).collect();
     if !parts.is_empty() {
         writeln!(
             out,
-            "  memory     {} (the inputs and the store are memory-mapped files, in neither)",
+            "  memory     {}; the inputs and the store are memory-mapped files, in neither",
             parts.join(", ")
         )?;
     }

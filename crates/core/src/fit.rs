@@ -102,9 +102,10 @@ pub struct FitReport {
     /// ([`crate::heap::Counting`]); the inputs and the store are mapped
     /// files, not heap.
     pub peak_heap: Option<usize>,
-    /// Largest private memory of the process ([`crate::heap::private`],
-    /// `VmData`) during the fit, sampled every 5 ms and at the end; `None`
-    /// where the system does not report it.
+    /// Largest resident private memory of the process
+    /// ([`crate::heap::resident_private`], `RssAnon`) during the fit,
+    /// sampled every 5 ms and at the end; `None` where the system does not
+    /// report it.
     pub peak_private: Option<u64>,
 }
 
@@ -347,7 +348,8 @@ fn reusable(
     Some((store, y, old.store))
 }
 
-/// The process's largest private memory ([`crate::heap::private`]) while
+/// The process's largest resident private memory
+/// ([`crate::heap::resident_private`]) while
 /// it is alive: a thread samples it every [`PrivatePeak::PERIOD`].
 #[derive(Default)]
 struct PrivatePeak {
@@ -361,7 +363,7 @@ impl PrivatePeak {
 
     /// Start sampling (if the system reports private memory).
     fn start(&self) {
-        let Some(first) = crate::heap::private() else {
+        let Some(first) = crate::heap::resident_private() else {
             return;
         };
         self.peak.store(first, Ordering::Relaxed);
@@ -372,7 +374,7 @@ impl PrivatePeak {
             .stack_size(64 << 10)
             .spawn(move || {
                 while !stop.load(Ordering::Relaxed) {
-                    if let Some(now) = crate::heap::private() {
+                    if let Some(now) = crate::heap::resident_private() {
                         peak.fetch_max(now, Ordering::Relaxed);
                     }
                     std::thread::sleep(PrivatePeak::PERIOD);
@@ -382,7 +384,7 @@ impl PrivatePeak {
 
     /// The largest sample, with one taken now.
     fn peak(&self) -> Option<u64> {
-        let now = crate::heap::private()?;
+        let now = crate::heap::resident_private()?;
         Some(self.peak.fetch_max(now, Ordering::Relaxed).max(now))
     }
 }

@@ -16,13 +16,15 @@
 //! of operations, so their results do not depend on the thread count.
 //!
 //! The eigen-decomposition ([`symmetric_eigen`]: the PCA start, once per
-//! fit, and PCA leave-one-out) is faer's, on the calling thread
-//! (`Par::Seq`), several times faster than a hand-written one from a few
-//! hundred rows (figures in `docs/performance.md`). It reserves that scratch in its thread, but
-//! touches little of it: resident private memory (`RssAnon`) grows by
-//! about 0.4 MB at N = 100 and 2 MB at N = 1000. Its results do not depend
-//! on the thread count; unlike the kernels', their last bits may differ
-//! from one CPU to another (faer picks its SIMD path at run time).
+//! fit, and PCA leave-one-out) is faer's, sequential (`Par::Seq`), several
+//! times faster than a hand-written one from a few hundred rows (figures in
+//! `docs/performance.md`). It runs on a thread of its own that ends with
+//! the call, so the scratch faer's products reserve there (twice the
+//! reported L3, barely touched: resident private memory, `RssAnon`, grows
+//! by about 0.4 MB at N = 100 and 2 MB at N = 1000) is given back at once
+//! and no caller's thread keeps it. Its results do not depend on the
+//! thread count; unlike the kernels', their last bits may differ from one
+//! CPU to another (faer picks its SIMD path at run time).
 
 pub mod cholesky;
 pub mod eigen;
