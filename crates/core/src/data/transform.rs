@@ -163,7 +163,8 @@ impl InverseForm {
 /// angles, clamped at 0. The last dims' products are kept (a pass, a
 /// transform and a model of the same dims each ask for them, and the
 /// trigonometry of 1.46 million bins costs tens of milliseconds where a
-/// copy costs a few).
+/// copy costs a few). Computed in parallel, bin by bin: the same values
+/// on any number of threads.
 pub(crate) fn cosine_products(dims: Dims) -> Vec<f64> {
     use std::sync::{Arc, Mutex};
     static LAST: Mutex<Option<(Dims, Arc<[f64]>)>> = Mutex::new(None);
@@ -175,12 +176,18 @@ pub(crate) fn cosine_products(dims: Dims) -> Vec<f64> {
     if let Some(c) = kept {
         return c.to_vec();
     }
-    let c: Arc<[f64]> = (0..dims.bins())
-        .map(|b| {
-            let (ci, co) = dims.angles_of(b).cosines();
-            (ci * co).max(0.0)
-        })
-        .collect();
+    let c: Vec<f64> = {
+        use rayon::prelude::*;
+        (0..dims.bins())
+            .into_par_iter()
+            .with_min_len(1 << 14)
+            .map(|b| {
+                let (ci, co) = dims.angles_of(b).cosines();
+                (ci * co).max(0.0)
+            })
+            .collect()
+    };
+    let c: Arc<[f64]> = c.into();
     if let Ok(mut last) = LAST.lock() {
         *last = Some((dims, Arc::clone(&c)));
     }
