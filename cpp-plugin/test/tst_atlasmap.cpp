@@ -751,7 +751,16 @@ private slots:
         const int i = view_->nearestMaterial(view_->marker());
         QVERIFY(panel_->coordinatesLabel()->text().contains(QString::number(view_->marker().x(), 'f', 4)));
         QVERIFY(i >= 0);
+        // A name hovered in the window is not left drawn on the panel's map.
+        // (The move is sent to the view itself: QTest::mouseMove places
+        // the platform's cursor, which finds the panel's window first.)
+        view_->setWindow(view_->materialPoints()[i], view_->scale());
+        QMouseEvent move(QEvent::MouseMove, view_->latentToWidget(view_->materialPoints()[i]),
+                         Qt::NoButton, Qt::NoButton, Qt::NoModifier);
+        QApplication::sendEvent(view_, &move);
+        QCOMPARE(view_->hoveredMaterial(), i);
         QVERIFY(panel_->mapWindow()->close());
+        QCOMPARE(view_->hoveredMaterial(), -1);
         QVERIFY(!panel_->mapDetached());
         QVERIFY(!panel_->detachButton()->isChecked());
         QCOMPARE(static_cast<QWidget *>(view_)->window(), static_cast<QWidget *>(panel_));

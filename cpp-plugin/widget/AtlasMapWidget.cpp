@@ -468,7 +468,9 @@ void AtlasMapView::mouseReleaseEvent(QMouseEvent *e) {
     setMarker(i >= 0 ? points_[i] : widgetToLatent(e->localPos()));
 }
 
-void AtlasMapView::leaveEvent(QEvent *) {
+void AtlasMapView::leaveEvent(QEvent *) { clearHover(); }
+
+void AtlasMapView::clearHover() {
     if (hovered_ >= 0) {
         hovered_ = -1;
         update();

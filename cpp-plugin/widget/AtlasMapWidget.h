@@ -133,6 +133,10 @@ public:
 
     /// Index of the material under the mouse, -1 if none.
     int hoveredMaterial() const { return hovered_; }
+    /// Forget the hovered material and its name: the pointer has left
+    /// (also when the view moves to another window, which sends no leave
+    /// event).
+    void clearHover();
     /// A material's point is under the cursor within this radius (pixels):
     /// it is hovered, and a click there picks exactly that material.
     static constexpr double kHitRadius = 7.0;

@@ -293,6 +293,8 @@ void AtlasPanel::setMapDetached(bool detached) {
         return;
     }
     auto *column = static_cast<QVBoxLayout *>(layout());
+    // The pointer is not over the view where it goes next.
+    view_->clearHover();
     if (detached && view_->parentWidget() != mapWindow_) {
         column->replaceWidget(view_, mapAway_);
         mapAway_->setVisible(true);
