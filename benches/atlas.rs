@@ -132,7 +132,7 @@ fn atlas(c: &mut Criterion) {
     let budget = log.field_budget(1024 * 1024, brdf_atlas_core::DEFAULT_SAMPLES);
     g.bench_function("log_field_build_1/100", |b| {
         b.iter(|| {
-            log.build_field(brdf_atlas_core::field::domain_of(small), budget)
+            log.build_field(brdf_atlas_core::albedo_field::domain_of(small), budget)
                 .expect("field")
         })
     });

@@ -79,11 +79,11 @@ fn reconstruct_json_is_the_blend_the_library_computes() {
                 }
                 assert_eq!(
                     moved["s"].as_f64().unwrap(),
-                    brdf_atlas_core::floor::FLOOR_SHARE
+                    brdf_atlas_core::soft_floor::FLOOR_SHARE
                 );
                 assert_eq!(
                     moved["d"].as_f64().unwrap(),
-                    brdf_atlas_core::floor::FLOOR_SOFTNESS
+                    brdf_atlas_core::soft_floor::FLOOR_SOFTNESS
                 );
                 let p = blend.plausibility().unwrap();
                 assert_eq!(p.clamped_reflectance, 0.0, "the floor rule clamped {p:?}");

@@ -90,7 +90,7 @@ pub fn write(
             report,
             "  (the GP's weights: the {} rule lifts each value softly onto a floor at {} times a convex blend's)",
             rule.name(),
-            brdf_atlas_core::floor::FLOOR_SHARE
+            brdf_atlas_core::soft_floor::FLOOR_SHARE
         )?;
     }
     let confidence = blend.confidence();
@@ -197,8 +197,8 @@ pub fn record(
                 "rule": "each value is c h(g / c), g its value under the weights above, c under towards, \
                          h(r) = s + d ln(1 + e^((r - s) / d))",
                 "towards": by_name(towards),
-                "s": brdf_atlas_core::floor::FLOOR_SHARE,
-                "d": brdf_atlas_core::floor::FLOOR_SOFTNESS,
+                "s": brdf_atlas_core::soft_floor::FLOOR_SHARE,
+                "d": brdf_atlas_core::soft_floor::FLOOR_SOFTNESS,
             })
         })
     });

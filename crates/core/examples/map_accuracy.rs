@@ -12,7 +12,7 @@
 
 use std::time::Instant;
 
-use brdf_atlas_core::measure::reference_albedo;
+use brdf_atlas_core::map_error::reference_albedo;
 use brdf_atlas_core::{AlbedoMap, AlbedoMethod, BlendRule, Model, NoProgress, View};
 
 const SIDE: usize = 1024;

@@ -10,7 +10,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use brdf_atlas_core::measure::reference_albedo;
+use brdf_atlas_core::map_error::reference_albedo;
 use brdf_atlas_core::{
     AlbedoMap, AlbedoMethod, BlendRule, CoreError, FitOptions, GplvmParams, Model, NoProgress,
     Precision, Progress, TransformKind, View, fit_dir,
@@ -252,7 +252,7 @@ fn a_raw_models_gp_map_is_the_exact_linear_one_and_its_floor_map_is_not() {
 
 #[test]
 fn a_views_domain_holds_it_and_is_at_most_four_times_its_size() {
-    use brdf_atlas_core::field::domain_of;
+    use brdf_atlas_core::albedo_field::domain_of;
     let mut s = 99u64;
     let mut next = || {
         s = s
@@ -306,7 +306,7 @@ fn the_plan_gives_up_only_fields_the_budget_cannot_hold() {
     }
     let (mut built, mut skipped) = (0, 0);
     for view in views {
-        let domain = brdf_atlas_core::field::domain_of(view);
+        let domain = brdf_atlas_core::albedo_field::domain_of(view);
         for budget in [81, 300, 2000] {
             let plan = model.plan_field(domain, budget).unwrap();
             let exact = model.build_field(domain, budget).unwrap();

@@ -5,8 +5,8 @@
 mod common;
 
 use brdf_atlas_core::TransformKind;
-use brdf_atlas_core::floor::{FLOOR_SHARE, FLOOR_SOFTNESS};
 use brdf_atlas_core::loo::{self, CONVEX_LENGTH_RATIO};
+use brdf_atlas_core::soft_floor::{FLOOR_SHARE, FLOOR_SOFTNESS};
 use brdf_atlas_core::{BlendRule, Model, NoProgress};
 use brdf_merl::directional::INCIDENCE_DEGREES;
 use brdf_merl::{DirectionalRule, MerlTable};
@@ -56,7 +56,7 @@ fn inverse(kind: TransformKind, bin: usize, v: f64) -> f64 {
 }
 
 /// The cap's reach per channel at convex weights `v`, recomputed from the
-/// stored rows as `query::floor::reach_cap` and the store's energy bound
+/// stored rows as `soft_floor::reach_cap` and the store's energy bound
 /// define it: the largest `r` in [0, 1] for which `(1 - r) sum_i v_i A_i +
 /// r A_top` stays under `max(1, max_i A_i)` (less 1e-9 of it) at every
 /// incidence, `A_i` each material's directional albedo and `A_top` that of

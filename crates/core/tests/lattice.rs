@@ -11,7 +11,7 @@ mod common;
 
 use std::path::Path;
 
-use brdf_atlas_core::measure::reference_albedo;
+use brdf_atlas_core::map_error::reference_albedo;
 use brdf_atlas_core::{
     AlbedoLattice, AlbedoMethod, BlendRule, LATTICE_TOLERANCE, Model, NoProgress, TransformKind,
     View, lattice_path,

@@ -5,7 +5,7 @@
 
 use std::time::Instant;
 
-use brdf_atlas_core::measure::map_error;
+use brdf_atlas_core::map_error::map_error;
 use brdf_atlas_core::{
     AlbedoMethod, BlendRule, DEFAULT_SAMPLES, LATTICE_TOLERANCE, Model, NoProgress, View,
 };
@@ -147,7 +147,7 @@ pub fn methods(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error>
 /// The dense references of `pixels` of a `size x size` map of `view`
 /// (the default blend, integrated with `rule`): all of them from one pass
 /// over the rule's rows ([`Model::exact_albedos_by`], equal to
-/// [`brdf_atlas_core::measure::reference_albedo`] point by point to rounding).
+/// [`brdf_atlas_core::map_error::reference_albedo`] point by point to rounding).
 fn references(
     model: &Model,
     view: &View,

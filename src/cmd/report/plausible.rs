@@ -156,7 +156,7 @@ pub fn markdown(w: &mut dyn Write, r: &Results, plan: &Plan) -> io::Result<()> {
                  function of the point's weights only): log RMSE {:.5} ({:+.1}% against the \
                  GP's weights).\n",
                 t.name(),
-                brdf_atlas_core::floor::FLOOR_SHARE,
+                brdf_atlas_core::soft_floor::FLOOR_SHARE,
                 fl.log,
                 100.0 * (fl.log / base.log - 1.0),
             )?;

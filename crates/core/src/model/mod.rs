@@ -1,5 +1,5 @@
 //! A fitted model: the latent points and kernel of a model file, its store
-//! mapped, and `K` factorised, ready for queries (`crate::query`: the
+//! mapped, and `K` factorised, ready for queries (`crate::maps`: the
 //! material at a latent point, maps, locating a new material).
 //!
 //! - [`file`]: the model file's format (JSON beside the store);
@@ -19,6 +19,7 @@ use crate::data::transform::Transform;
 use crate::dense::Cholesky;
 use crate::error::{CoreError, Result};
 
+pub mod blend;
 pub mod file;
 pub mod judged;
 mod recent;
@@ -277,7 +278,7 @@ fn check_store(file: &ModelFile, store: &Store) -> Result<()> {
 /// or sample count: built by the first map that needs them and kept, so
 /// that a viewer redrawing the map on every zoom or pan (the BRDF Explorer
 /// plugin does) pays once for the passes over the store behind them. The
-/// map fills them (`crate::query::map`).
+/// map fills them (`crate::maps::albedo_map`).
 #[derive(Default)]
 pub(crate) struct MapBasis {
     /// The dense albedo rule with 2 sub-cells a bin.
@@ -286,23 +287,23 @@ pub(crate) struct MapBasis {
     pub(crate) linear: OnceLock<([Vec<f64>; 3], [f64; 3])>,
     /// The mean material's shape inside each quadrature box.
     pub(crate) shape: OnceLock<Vec<f64>>,
-    /// The dense rule's store rows and weights (`crate::query::exact`'s
+    /// The dense rule's store rows and weights (`crate::maps::exact_albedos`'s
     /// `RuleRows`; held by type so that the model does not name the query).
     pub(crate) rule_rows: OnceLock<Box<dyn Any + Send + Sync>>,
     /// The rows of the map's nodes: the dense rule on fewer phi_d bins
-    /// (`crate::query::exact`'s `RuleRows`).
+    /// (`crate::maps::exact_albedos`'s `RuleRows`).
     pub(crate) node_rows: OnceLock<Box<dyn Any + Send + Sync>>,
     /// The rows of the map's per-pixel rule at its default sample count,
-    /// which plan a field (`crate::query::exact`'s `RuleRows`).
+    /// which plan a field (`crate::maps::exact_albedos`'s `RuleRows`).
     pub(crate) plan_rows: OnceLock<Box<dyn Any + Send + Sync>>,
     /// The last albedo fields built, and domains given up
-    /// (`crate::query::field`'s cache entries).
+    /// (`crate::maps::albedo_field`'s cache entries).
     pub(crate) fields: Recent,
-    /// The map's last per-pixel rules (`crate::query::map`'s `PixelRule`),
+    /// The map's last per-pixel rules (`crate::maps::albedo_map`'s `PixelRule`),
     /// one a sample count.
     pub(crate) pixel_rules: Recent,
     /// The prepared map saved beside the model, read on first use
-    /// (`crate::query::lattice`'s load result).
+    /// (`crate::maps::lattice`'s load result).
     pub(crate) lattice: OnceLock<Box<dyn Any + Send + Sync>>,
 }
 

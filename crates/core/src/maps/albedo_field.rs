@@ -61,11 +61,12 @@ use std::sync::Arc;
 
 use crate::dense::product::matmul;
 use crate::error::{CoreError, Result};
+use crate::maps::exact_albedos::RuleRows;
+use crate::maps::view::View;
 use crate::model::Model;
+use crate::model::blend::pass_weights::floor_of;
+use crate::model::blend::plausibility::BlendRule;
 use crate::progress::{NoProgress, Progress};
-use crate::query::exact::{RuleRows, floor_of};
-use crate::query::plausibility::BlendRule;
-use crate::query::view::View;
 use crate::simd::dot;
 
 /// The largest error of the albedo interpolant allowed at a refinement's new

@@ -20,8 +20,8 @@ use brdf_merl::MerlFile;
 use crate::error::{CoreError, Result};
 use crate::gplvm::kernel::rows_of;
 use crate::gplvm::optim::BOX;
+use crate::maps::albedo_map::View;
 use crate::model::Model;
-use crate::query::map::View;
 use crate::simd::fold::ordered_blocks;
 
 /// How many length scales beyond the inputs the search reaches: there the

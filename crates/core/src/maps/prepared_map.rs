@@ -1,4 +1,4 @@
-//! What a model does with its prepared map ([`crate::query::lattice`]):
+//! What a model does with its prepared map ([`crate::maps::lattice`]):
 //! build it ([`Model::prepare_map`]), read the one saved beside it
 //! ([`Model::prepared_map`]), and draw maps with it, the pixels in its
 //! window from its cubic and the strips outside as without it.
@@ -7,16 +7,16 @@ use std::collections::HashMap;
 use std::sync::{Arc, OnceLock};
 
 use crate::error::{CoreError, Result};
-use crate::model::Model;
-use crate::progress::Progress;
-use crate::query::exact::floor_of;
-use crate::query::lattice::{
+use crate::maps::albedo_map::{AlbedoMap, AlbedoMethod};
+use crate::maps::lattice::{
     AlbedoLattice, CHUNK, COARSEST, Drawn, FINEST, Key, Loaded, cubic, grids_of, lattice_path,
     relative_error, stencil_keys,
 };
-use crate::query::map::{AlbedoMap, AlbedoMethod};
-use crate::query::plausibility::BlendRule;
-use crate::query::view::View;
+use crate::maps::view::View;
+use crate::model::Model;
+use crate::model::blend::pass_weights::floor_of;
+use crate::model::blend::plausibility::BlendRule;
+use crate::progress::Progress;
 
 impl Model {
     /// A fingerprint of the fit (its model file's content): a lattice built
@@ -29,7 +29,7 @@ impl Model {
     /// Build the prepared map of the default view of `rule`'s material
     /// (the gp or floor rule), refined until each cell's cubic is within
     /// `tolerance` of the exact albedos at the finer lattice's new nodes
-    /// ([`crate::query::lattice`]). Several minutes on two cores for 100 materials at full
+    /// ([`crate::maps::lattice`]). Several minutes on two cores for 100 materials at full
     /// resolution (about ten thousand exact albedos). Cancelled through
     /// `progress` it returns [`CoreError::Cancelled`].
     pub fn prepare_map(

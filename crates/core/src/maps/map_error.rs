@@ -5,9 +5,9 @@
 use brdf_merl::Quadrature;
 
 use crate::error::Result;
+use crate::maps::albedo_map::AlbedoMap;
 use crate::model::Model;
-use crate::query::BlendRule;
-use crate::query::map::AlbedoMap;
+use crate::model::blend::BlendRule;
 
 /// Albedo of the reconstruction `blend` forms at `x`, integrated with
 /// `rule` over every bin it names (unmeasured bins count as 0, negative

@@ -19,8 +19,8 @@ use crate::data::store::Rows;
 use crate::dense::product::matmul;
 use crate::error::Result;
 use crate::model::Model;
-use crate::query::budget::{Budget, CLAMP_BUDGET, STEPS, counted};
-use crate::query::reconstruct::{Bands, Blend};
+use crate::model::blend::plausible_budget::{Budget, CLAMP_BUDGET, STEPS, counted};
+use crate::model::blend::reconstruct::{Bands, Blend};
 use crate::simd::dot;
 
 /// Store rows a step of the pass multiplies at once.

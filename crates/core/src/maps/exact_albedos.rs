@@ -1,19 +1,20 @@
 //! Exact albedos at latent points: the dense rule (or another rule's rows)
 //! over the full reconstruction, all the points in one pass over the store.
 //!
-//! The albedo field ([`crate::query::field`]) takes its nodes from here,
+//! The albedo field ([`crate::maps::albedo_field`]) takes its nodes from here,
 //! and plans its refinement on the rows of the map's per-pixel rule, a few
 //! hundred instead of millions, before paying for exact nodes.
 
 use brdf_merl::Quadrature;
-use faer::Mat;
 
 use crate::data::transform::InverseForm;
 use crate::dense::product::matmul;
 use crate::error::{CoreError, Result};
 use crate::model::Model;
-use crate::query::floor::{floor_points, top_of};
-use crate::query::plausibility::BlendRule;
+use crate::model::blend::pass_weights::PassWeights;
+use crate::model::blend::pass_weights::floor_of;
+use crate::model::blend::plausibility::BlendRule;
+use crate::model::blend::soft_floor::{floor_points, top_of};
 use crate::simd::fastexp;
 use crate::simd::fold::{GROUPS, ordered_blocks};
 
@@ -250,54 +251,6 @@ impl Model {
     }
 }
 
-impl Model {
-    /// The weights of a pass over the store at `points` ([`PassWeights`]).
-    pub(crate) fn pass_weights(&self, points: &[[f64; 2]], floor: bool) -> Result<PassWeights> {
-        for p in points {
-            self.kernel_and_weights_at(p)?;
-        }
-        let (latent, kernel) = (self.latent(), self.file().kernel);
-        let (n, m) = (latent.nrows(), points.len());
-        let kx = Mat::from_fn(n, m, |i, j| {
-            kernel.eval(&[latent[(i, 0)], latent[(i, 1)]], &points[j])
-        });
-        let w = self.llt_solve(&kx);
-        let a: Vec<f64> = (0..n)
-            .flat_map(|t| (0..m).map(move |j| (t, j)))
-            .map(|(t, j)| w[(t, j)])
-            .collect();
-        let mut out = PassWeights {
-            gp: a,
-            convex: Vec::new(),
-            reach: Default::default(),
-        };
-        if floor {
-            let v = self.convex_weights_at(points);
-            out.convex = (0..n)
-                .flat_map(|t| (0..m).map(move |j| (t, j)))
-                .map(|(t, j)| v[j][t])
-                .collect();
-            let bound = self.store().energy_bound();
-            let reach: Vec<[f64; 3]> = v.iter().map(|v| bound.reach(v)).collect();
-            out.reach = [0, 1, 2].map(|c| reach.iter().map(|r| r[c]).collect());
-        }
-        Ok(out)
-    }
-}
-
-/// The weights of a pass over the store at `m` points.
-pub(crate) struct PassWeights {
-    /// The GP's `K^-1 k(x)` of every point laid out `n x m` row-major
-    /// (material `t`, point `j` at `t m + j`), so that a block of store rows
-    /// `Z_block` (`len x n`) gives the points' values as one product.
-    pub(crate) gp: Vec<f64>,
-    /// Under the floor, the convex weights laid out alike (else empty).
-    pub(crate) convex: Vec<f64>,
-    /// Under the floor, each channel's reach at every point
-    /// ([`crate::query::floor::reach_cap`]; else empty).
-    pub(crate) reach: [Vec<f64>; 3],
-}
-
 /// A worker's buffers for [`Model::exact_albedos`]: a block of rows and
 /// its values at the nodes (kept between calls, so a pass allocates nothing).
 #[derive(Default)]
@@ -309,19 +262,4 @@ struct Scratch {
 
 thread_local! {
     static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch::default());
-}
-
-/// Whether the map and the exact pass put every value of `rule`'s material on
-/// its soft floor; the plausible rule's steps are not a function of the
-/// point's weights, so no map draws them.
-pub(crate) fn floor_of(rule: BlendRule) -> Result<bool> {
-    match rule {
-        BlendRule::Gp => Ok(false),
-        BlendRule::Floor => Ok(true),
-        BlendRule::Plausible => Err(CoreError::BadQuery(
-            "the plausible rule's albedo has no map (its steps need a pass over the store per \
-             point): use the gp or floor rule"
-                .into(),
-        )),
-    }
 }

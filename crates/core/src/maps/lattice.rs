@@ -35,10 +35,10 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result};
+use crate::maps::view::View;
 use crate::model::Model;
+use crate::model::blend::plausibility::BlendRule;
 use crate::progress::Progress;
-use crate::query::plausibility::BlendRule;
-use crate::query::view::View;
 
 /// The largest error of a cell's cubic allowed at the finer lattice's new
 /// nodes, relative to the node's largest channel: 0.5%.

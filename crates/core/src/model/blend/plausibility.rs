@@ -24,11 +24,11 @@ use brdf_merl::MerlTable;
 
 use crate::error::Result;
 use crate::model::Model;
-use crate::query::reconstruct::Blend;
+use crate::model::blend::reconstruct::Blend;
 
 /// Rows a worker handles at once (fixed, so sums do not depend on the thread
 /// count; the table's, so [`Blend::table_and_plausibility`] sums alike).
-const CHUNK: usize = crate::query::reconstruct::TABLE_CHUNK;
+const CHUNK: usize = crate::model::blend::reconstruct::TABLE_CHUNK;
 
 /// Above this predictive variance (out of the prior's 1) a point is reported
 /// as one where the model knows little: the data explain less than half of
@@ -61,7 +61,7 @@ pub enum BlendRule {
     /// blend's (the convex weights `v` of [`BlendRule::Plausible`]): a row
     /// with GP value `g` and convex value `c` becomes
     /// `c h(g / c)`, `h` a smooth maximum of `g / c` and
-    /// [`crate::query::floor::FLOOR_SHARE`] ([`crate::query::floor`]). No
+    /// [`crate::model::blend::soft_floor::FLOOR_SHARE`] ([`crate::model::blend::soft_floor`]). No
     /// value is ever clamped, values well above the floor keep the GP's,
     /// and each value depends on the point's two weight vectors alone: no
     /// pass over the store, and the material varies smoothly over the map.

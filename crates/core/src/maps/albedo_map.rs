@@ -11,7 +11,7 @@
 //! - **Field** (log transform): the inverse transform is not linear, but
 //!   the albedo is a smooth function of the latent point: exact albedos at
 //!   the nodes of refined grids, and the polynomial through them at every
-//!   pixel, with an error estimate ([`crate::query::field`]). The predictive
+//!   pixel, with an error estimate ([`crate::maps::albedo_field`]). The predictive
 //!   variance is interpolated the same way.
 //! - **Quadrature** (on request, `samples`): each pixel reconstructs exactly the bins of a quadrature
 //!   rule with `samples` points and integrates them. The rows the rule needs
@@ -29,17 +29,18 @@ use serde::{Deserialize, Serialize};
 use crate::data::store::Rows;
 use crate::dense::product::matmul;
 use crate::error::{CoreError, Result};
+use crate::maps::albedo_field::{eval_row, variances};
+use crate::maps::exact_albedos::RuleRows;
+pub use crate::maps::view::View;
 use crate::model::Model;
+use crate::model::blend::pass_weights::floor_of;
+use crate::model::blend::plausibility::BlendRule;
+use crate::model::blend::soft_floor::floor_rows;
 use crate::progress::Progress;
-use crate::query::exact::{RuleRows, floor_of};
-use crate::query::field::{eval_row, variances};
-use crate::query::floor::floor_rows;
-use crate::query::plausibility::BlendRule;
-pub use crate::query::view::View;
 use crate::simd::dot;
 use crate::simd::fastexp;
 
-pub use crate::query::exact::DEFAULT_SAMPLES;
+pub use crate::maps::exact_albedos::DEFAULT_SAMPLES;
 
 /// How a map's albedo was computed.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -49,7 +50,7 @@ pub enum AlbedoMethod {
     Linear,
     /// A polynomial through exact albedos (the dense rule over the full
     /// reconstruction) at the nodes of grids on patches of the view's
-    /// domain ([`crate::query::field`]).
+    /// domain ([`crate::maps::albedo_field`]).
     Field {
         /// Exact albedos the field holds.
         nodes: usize,
@@ -59,7 +60,7 @@ pub enum AlbedoMethod {
         estimate: f64,
     },
     /// The cubic of the prepared map's adaptive lattice of exact albedos
-    /// ([`crate::query::lattice`]), saved beside the model.
+    /// ([`crate::maps::lattice`]), saved beside the model.
     Lattice {
         /// Exact albedos the lattice holds.
         nodes: usize,
@@ -437,7 +438,7 @@ pub(crate) struct PixelRule {
     cv: Vec<f64>,
     mean: Vec<f64>,
     /// The largest centred value of each rule row (the soft floor's cap,
-    /// [`crate::query::floor::floor_capped`]).
+    /// [`crate::model::blend::soft_floor::floor_capped`]).
     top: Vec<f64>,
 }
 

@@ -4,7 +4,7 @@
 //! [`Blend::plausibility`] reads the whole store for one point. For the
 //! GP's blend and the soft floor the values of a block of store rows at
 //! every point are one product with the points' weights (as the exact
-//! albedos are, [`crate::query::exact`]), so `m` points cost one pass and a
+//! albedos are, [`crate::maps::exact_albedos`]), so `m` points cost one pass and a
 //! product instead of `m` passes. The largest directional albedo reads only
 //! the directional rule's bins, all the points from one read of each
 //! ([`Model::largest_albedos`]).
@@ -15,11 +15,11 @@ use rayon::prelude::*;
 use crate::dense::product::matmul;
 use crate::error::Result;
 use crate::model::Model;
-use crate::query::every::Every;
-use crate::query::exact::{PassWeights, floor_of};
-use crate::query::floor::{floor_points, top_of};
-use crate::query::plausibility::{BlendRule, ClampSums, Plausibility};
-use crate::query::reconstruct::Blend;
+use crate::model::blend::pass_bins::Every;
+use crate::model::blend::pass_weights::{PassWeights, floor_of};
+use crate::model::blend::plausibility::{BlendRule, ClampSums, Plausibility};
+use crate::model::blend::reconstruct::Blend;
+use crate::model::blend::soft_floor::{floor_points, top_of};
 use crate::simd::fold::{GROUPS, ordered_blocks};
 
 /// Rows of the store a step of the pass multiplies at once.
