@@ -53,7 +53,7 @@ pub fn write(
     report: &mut impl Write,
 ) -> Result<(), Error> {
     let t0 = Instant::now();
-    let blend = model.at_with(x, rule)?;
+    let blend = model.at(x, rule)?;
     // The table and its plausibility figures from one pass over the store.
     let (table, plausibility) = blend.table_and_plausibility()?;
     table.write(out)?;
@@ -223,7 +223,7 @@ pub fn record(
 pub fn run(args: &Args) -> Result<ExitCode, Error> {
     let (model, x) = args.target.open()?;
     if args.json {
-        let blend = model.at_with(x, args.target.blend)?;
+        let blend = model.at(x, args.target.blend)?;
         blend.table()?.write(&args.out)?;
         let mut rec = record(&model, args.target.blend, &blend)?;
         rec["output"] = json!(args.out.display().to_string());

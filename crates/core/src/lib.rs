@@ -26,12 +26,12 @@
 //!   detected once).
 //!
 //! ```no_run
-//! use brdf_atlas_core::{Model, View};
+//! use brdf_atlas_core::{Atlas, BlendRule, MapRequest, Model, View};
 //!
-//! let model = Model::open("atlas.model")?;
-//! let material = model.at(&[0.3, -0.5])?;
+//! let atlas = Atlas::new(Model::open("atlas.model")?);
+//! let material = atlas.model().at(&[0.3, -0.5], BlendRule::Gp)?;
 //! let table = material.table()?;
-//! let map = model.albedo_map(256, 256, View::default(), None, &brdf_atlas_core::NoProgress)?;
+//! let map = atlas.map(MapRequest::new(256, 256).view(View::default()))?;
 //! # let _ = (table, map);
 //! # Ok::<(), brdf_atlas_core::CoreError>(())
 //! ```
@@ -62,8 +62,9 @@ pub use gplvm::optim;
 pub use gplvm::{CheckedParams, DriftStats, Fit, GplvmParams, GramData, Kernel, OptimizerKind};
 pub use locate::Located;
 pub use maps::{
-    AlbedoLattice, AlbedoMap, AlbedoMethod, DEFAULT_SAMPLES, LATTICE_TOLERANCE, NODE_PHI_D_STEP,
-    Segment, View, contour_levels, contours, lattice_path, luminance,
+    AlbedoField, AlbedoLattice, AlbedoMap, AlbedoMethod, AlbedoRequest, Atlas, DEFAULT_SAMPLES,
+    FieldRequest, Integration, LATTICE_TOLERANCE, MapRequest, NODE_PHI_D_STEP, Segment, View,
+    contour_levels, contours, lattice_path, luminance,
 };
 pub use maps::{albedo_field, map_error};
 pub use model::blend::soft_floor;

@@ -19,7 +19,7 @@ pub fn reference_albedo(
     blend: BlendRule,
     rule: &Quadrature,
 ) -> Result<[f64; 3]> {
-    let blend = model.at_with(x, blend)?;
+    let blend = model.at(x, blend)?;
     let albedo = rule.integrate(|bin| [0, 1, 2].map(|c| blend.value(c, bin).unwrap_or(0.0)));
     model.verify()?;
     Ok(albedo)

@@ -9,9 +9,9 @@
 pub(crate) mod pass_bins;
 pub(crate) mod pass_weights;
 pub mod plausibility;
-mod plausibility_sweep;
+pub(crate) mod plausibility_sweep;
 pub(crate) mod plausible_budget;
-mod plausible_steps;
+pub(crate) mod plausible_steps;
 pub mod reconstruct;
 pub mod soft_floor;
 

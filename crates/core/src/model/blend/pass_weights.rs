@@ -9,40 +9,39 @@ use faer::Mat;
 use crate::error::{CoreError, Result};
 use crate::model::Model;
 use crate::model::blend::plausibility::BlendRule;
+use crate::model::blend::plausible_budget::convex_weights_at;
 
-impl Model {
-    /// The weights of a pass over the store at `points` ([`PassWeights`]).
-    pub(crate) fn pass_weights(&self, points: &[[f64; 2]], floor: bool) -> Result<PassWeights> {
-        for p in points {
-            self.kernel_and_weights_at(p)?;
-        }
-        let (latent, kernel) = (self.latent(), self.file().kernel);
-        let (n, m) = (latent.nrows(), points.len());
-        let kx = Mat::from_fn(n, m, |i, j| {
-            kernel.eval(&[latent[(i, 0)], latent[(i, 1)]], &points[j])
-        });
-        let w = self.llt_solve(&kx);
-        let a: Vec<f64> = (0..n)
-            .flat_map(|t| (0..m).map(move |j| (t, j)))
-            .map(|(t, j)| w[(t, j)])
-            .collect();
-        let mut out = PassWeights {
-            gp: a,
-            convex: Vec::new(),
-            reach: Default::default(),
-        };
-        if floor {
-            let v = self.convex_weights_at(points);
-            out.convex = (0..n)
-                .flat_map(|t| (0..m).map(move |j| (t, j)))
-                .map(|(t, j)| v[j][t])
-                .collect();
-            let bound = self.store().energy_bound();
-            let reach: Vec<[f64; 3]> = v.iter().map(|v| bound.reach(v)).collect();
-            out.reach = [0, 1, 2].map(|c| reach.iter().map(|r| r[c]).collect());
-        }
-        Ok(out)
+/// The weights of a pass over the store at `points` ([`PassWeights`]).
+pub(crate) fn pass_weights(model: &Model, points: &[[f64; 2]], floor: bool) -> Result<PassWeights> {
+    for p in points {
+        model.kernel_and_weights_at(p)?;
     }
+    let (latent, kernel) = (model.latent(), model.file().kernel);
+    let (n, m) = (latent.nrows(), points.len());
+    let kx = Mat::from_fn(n, m, |i, j| {
+        kernel.eval(&[latent[(i, 0)], latent[(i, 1)]], &points[j])
+    });
+    let w = model.llt_solve(&kx);
+    let a: Vec<f64> = (0..n)
+        .flat_map(|t| (0..m).map(move |j| (t, j)))
+        .map(|(t, j)| w[(t, j)])
+        .collect();
+    let mut out = PassWeights {
+        gp: a,
+        convex: Vec::new(),
+        reach: Default::default(),
+    };
+    if floor {
+        let v = convex_weights_at(model, points);
+        out.convex = (0..n)
+            .flat_map(|t| (0..m).map(move |j| (t, j)))
+            .map(|(t, j)| v[j][t])
+            .collect();
+        let bound = model.store().energy_bound();
+        let reach: Vec<[f64; 3]> = v.iter().map(|v| bound.reach(v)).collect();
+        out.reach = [0, 1, 2].map(|c| reach.iter().map(|r| r[c]).collect());
+    }
+    Ok(out)
 }
 
 /// The weights of a pass over the store at `m` points.

@@ -142,15 +142,15 @@ impl Memo {
 /// split does not depend on the thread count; results never do).
 pub(crate) const TABLE_CHUNK: usize = 4096;
 
-impl Model {
-    /// The blend at latent point `x` (`q` finite coordinates).
+impl<'m> Blend<'m> {
+    /// The GP's blend at latent point `x` (`q` finite coordinates).
     /// [`CoreError::FileChanged`](crate::CoreError::FileChanged) once the
     /// store is known to have changed (a model refuses every query then).
-    pub fn at(&self, x: &[f64]) -> Result<Blend<'_>> {
-        self.store().verify_cheap()?;
-        let (kernel, weights) = self.kernel_and_weights_at(x)?;
+    pub(crate) fn gp_at(model: &'m Model, x: &[f64]) -> Result<Blend<'m>> {
+        model.store().verify_cheap()?;
+        let (kernel, weights) = model.kernel_and_weights_at(x)?;
         Ok(Blend {
-            model: self,
+            model,
             x: x.to_vec(),
             kernel,
             gp: weights.clone(),
@@ -163,9 +163,9 @@ impl Model {
     }
 
     /// A blend of the stored rows with any weights (no latent point).
-    pub(crate) fn at_weights(&self, weights: &[f64]) -> Blend<'_> {
+    pub(crate) fn of_weights(model: &'m Model, weights: &[f64]) -> Blend<'m> {
         Blend {
-            model: self,
+            model,
             x: Vec::new(),
             kernel: Vec::new(),
             gp: weights.to_vec(),
