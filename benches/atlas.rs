@@ -20,14 +20,14 @@ use brdf_atlas_core::{
 use brdf_merl::angles::direction;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 
-fn fit(data: &Path, out: &Path, transform: TransformKind) -> Model {
+fn fit(data: &Path, out: &Path, transform: TransformKind) -> brdf_atlas_core::Atlas {
     let options = FitOptions {
         params: GplvmParams::new(2).check().expect("defaults"),
         transform,
         precision: Precision::F32,
     };
     fit_dir(data, out, &options, &NoProgress).expect("fit");
-    Model::open(out).expect("open model")
+    brdf_atlas_core::Atlas::new(Model::open(out).expect("open model"))
 }
 
 fn atlas(c: &mut Criterion) {
@@ -56,16 +56,22 @@ fn atlas(c: &mut Criterion) {
     g.sample_size(10);
     let x = [0.1, -0.2];
     g.bench_function("full_table_log", |b| {
-        b.iter(|| log.at(black_box(&x)).expect("point").table())
+        b.iter(|| {
+            log.at(black_box(&x), brdf_atlas_core::BlendRule::Gp)
+                .expect("point")
+                .table()
+        })
     });
-    let blend = log.at(&x).expect("point");
+    let blend = log.at(&x, brdf_atlas_core::BlendRule::Gp).expect("point");
     let bins = log.dims().bins();
     let count = 100_000;
     g.throughput(Throughput::Elements(count as u64));
     // A fresh blend each time: every bin is computed (memory-bound).
     g.bench_function("point_bins_log_first_touch", |b| {
         b.iter(|| {
-            let blend = log.at(black_box(&x)).expect("point");
+            let blend = log
+                .at(black_box(&x), brdf_atlas_core::BlendRule::Gp)
+                .expect("point");
             let mut s = 0.0;
             for k in 0..count {
                 if let Some(v) = blend.rgb((k * 7919) % bins) {
@@ -105,15 +111,8 @@ fn atlas(c: &mut Criterion) {
     // The GP blend's map of a raw model: exact and linear in the weights.
     g.bench_function("raw_linear_1024", |b| {
         b.iter(|| {
-            raw.albedo_map_with(
-                1024,
-                1024,
-                View::default(),
-                None,
-                BlendRule::Gp,
-                &NoProgress,
-            )
-            .expect("map")
+            raw.map(brdf_atlas_core::MapRequest::new(1024, 1024).rule(BlendRule::Gp))
+                .expect("map")
         })
     });
     // The default log map (the soft floor's material) of 1024 x 1024 pixels: of the default view (a
@@ -124,7 +123,7 @@ fn atlas(c: &mut Criterion) {
     // model's field (every later map of the region).
     g.bench_function("log_default_1024", |b| {
         b.iter(|| {
-            log.albedo_map(1024, 1024, View::default(), None, &NoProgress)
+            log.map(brdf_atlas_core::MapRequest::new(1024, 1024))
                 .expect("map")
         })
     });
@@ -132,20 +131,20 @@ fn atlas(c: &mut Criterion) {
     let budget = log.field_budget(1024 * 1024, brdf_atlas_core::DEFAULT_SAMPLES);
     g.bench_function("log_field_build_1/100", |b| {
         b.iter(|| {
-            log.build_field(brdf_atlas_core::field::domain_of(small), budget)
+            log.build_field(brdf_atlas_core::albedo_field::domain_of(small), budget)
                 .expect("field")
         })
     });
     g.bench_function("log_field_1024_1/100", |b| {
         b.iter(|| {
-            log.albedo_map(1024, 1024, small, None, &NoProgress)
+            log.map(brdf_atlas_core::MapRequest::new(1024, 1024).view(small))
                 .expect("map")
         })
     });
     for samples in [64usize, 256, 1024] {
         g.bench_function(BenchmarkId::new("log_quadrature_256", samples), |b| {
             b.iter(|| {
-                log.albedo_map(256, 256, View::default(), Some(samples), &NoProgress)
+                log.map(brdf_atlas_core::MapRequest::new(256, 256).samples(Some(samples)))
                     .expect("map")
             })
         });
@@ -156,7 +155,9 @@ fn atlas(c: &mut Criterion) {
     // MODEL.lattice beside it, from `brdf-atlas prepare`: minutes for 100
     // materials), or else prepared here for the log model above.
     let prepared = match std::env::var_os("BRDF_ATLAS_PREPARED_MODEL") {
-        Some(path) => Model::open(path).expect("open the prepared model"),
+        Some(path) => {
+            brdf_atlas_core::Atlas::new(Model::open(path).expect("open the prepared model"))
+        }
         None => {
             log.prepare_map(
                 BlendRule::Floor,
@@ -166,7 +167,7 @@ fn atlas(c: &mut Criterion) {
             .expect("prepare")
             .save(&brdf_atlas_core::lattice_path(log.path()))
             .expect("save the lattice");
-            Model::open(log.path()).expect("open model")
+            brdf_atlas_core::Atlas::new(Model::open(log.path()).expect("open model"))
         }
     };
     assert!(
@@ -178,7 +179,7 @@ fn atlas(c: &mut Criterion) {
         g.bench_function(BenchmarkId::new("log_prepared_1024", name), |b| {
             b.iter(|| {
                 prepared
-                    .albedo_map(1024, 1024, view, None, &NoProgress)
+                    .map(brdf_atlas_core::MapRequest::new(1024, 1024).view(view))
                     .expect("map")
             })
         });

@@ -20,7 +20,9 @@ use criterion::{Criterion, criterion_group, criterion_main};
 fn swatches(c: &mut Criterion) {
     let tmp = tempfile::tempdir().expect("temporary directory");
     let model = match std::env::var_os("BRDF_ATLAS_BENCH_MODEL") {
-        Some(path) => Model::open(path).expect("open BRDF_ATLAS_BENCH_MODEL"),
+        Some(path) => {
+            brdf_atlas_core::Atlas::new(Model::open(path).expect("open BRDF_ATLAS_BENCH_MODEL"))
+        }
         None => {
             let data = common::data_dir(tmp.path());
             let out = tmp.path().join("log.atlas");
@@ -30,7 +32,7 @@ fn swatches(c: &mut Criterion) {
                 precision: Precision::F32,
             };
             fit_dir(&data, &out, &options, &NoProgress).expect("fit");
-            Model::open(out).expect("open model")
+            brdf_atlas_core::Atlas::new(Model::open(out).expect("open model"))
         }
     };
     let points = swatch_sheet::grid_points(&View::default(), 8);
@@ -58,7 +60,7 @@ fn swatches(c: &mut Criterion) {
     }
     g.bench_function("plausible_rule_one_point", |b| {
         b.iter(|| {
-            let blend = model.at_with(black_box(&points[9]), BlendRule::Plausible);
+            let blend = model.at(black_box(&points[9]), BlendRule::Plausible);
             blend.expect("plausible blend").steps().is_some()
         })
     });

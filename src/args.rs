@@ -97,7 +97,7 @@ impl ModelPoint {
 
     /// The blend at the point under the chosen rule.
     pub fn blend<'m>(&self, model: &'m Model, x: &[f64]) -> Result<Blend<'m>, Error> {
-        Ok(model.at_with(x, self.blend)?)
+        Ok(model.at(x, self.blend)?)
     }
 }
 

@@ -337,7 +337,7 @@ fn eval_prints_what_the_library_computes() {
     ];
     let model = Model::open(fx.model()).unwrap();
     let expect = |rule: BlendRule| -> Vec<Option<[f64; 3]>> {
-        let blend = model.at_with(&at, rule).unwrap();
+        let blend = model.at(&at, rule).unwrap();
         pairs
             .iter()
             .map(|((ti, pi), (to, po))| {

@@ -6,8 +6,8 @@
 //! and `super::...` and `self::...`, brace groups included) are its
 //! dependencies. A folder is one
 //! unit to the modules outside it, so a dependency counts between the two
-//! siblings under the deepest module that contains both ends: `query::map`
-//! using `model::file` makes `query` depend on `model`.
+//! siblings under the deepest module that contains both ends:
+//! `maps::albedo_map` using `model::file` makes `maps` depend on `model`.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};

@@ -163,15 +163,13 @@ fn the_default_material_never_reflects_more_than_it_receives_and_its_nodes_are_e
         let (a, deg) = rule.max_albedo(&brdf_merl::MerlTable::read(f).unwrap());
         assert!(a < 1.0, "{}: {a} at {deg} degrees", f.display());
     }
-    let model = brdf_atlas_core::Model::open(&path).unwrap();
+    let model = brdf_atlas_core::Atlas::new(brdf_atlas_core::Model::open(&path).unwrap());
     for k in 0..49 {
         let x = [
             -1.3 + 2.6 * (k / 7) as f64 / 6.0,
             -1.3 + 2.6 * (k % 7) as f64 / 6.0,
         ];
-        let blend = model
-            .at_with(&x, brdf_atlas_core::BlendRule::Floor)
-            .unwrap();
+        let blend = model.at(&x, brdf_atlas_core::BlendRule::Floor).unwrap();
         let (a, deg) = blend.largest_albedo();
         assert!(
             a <= 1.0,
@@ -184,8 +182,17 @@ fn the_default_material_never_reflects_more_than_it_receives_and_its_nodes_are_e
         .map(|k| [-1.05 + 0.7 * (k / 4) as f64, -1.05 + 0.7 * (k % 4) as f64])
         .collect();
     let rule = brdf_atlas_core::BlendRule::Floor;
-    let dense = model.exact_albedos_with(&points, rule).unwrap();
-    let nodes = model.node_albedos_with(&points, rule).unwrap();
+    let dense = model
+        .exact_albedos(&points, brdf_atlas_core::AlbedoRequest::new().rule(rule))
+        .unwrap();
+    let nodes = model
+        .exact_albedos(
+            &points,
+            brdf_atlas_core::AlbedoRequest::new()
+                .rule(rule)
+                .integration(brdf_atlas_core::Integration::Nodes),
+        )
+        .unwrap();
     for ((x, d), n) in points.iter().zip(&dense).zip(&nodes) {
         for c in 0..3 {
             assert!(

@@ -23,18 +23,12 @@ fn fitted(dir: &Path) -> std::path::PathBuf {
 fn reconstruct_json_is_the_blend_the_library_computes() {
     let tmp = tempfile::tempdir().unwrap();
     let model_path = fitted(tmp.path());
-    let model = Model::open(&model_path).unwrap();
+    let model = brdf_atlas_core::Atlas::new(Model::open(&model_path).unwrap());
     // For the plausible rule, the first point of a grid over (and beyond)
     // the map's box where the rule moves the weights.
     let moving = (0..81)
         .map(|k| [-2.0 + 0.5 * (k % 9) as f64, -2.0 + 0.5 * (k / 9) as f64])
-        .find(|x| {
-            model
-                .at_with(x, BlendRule::Plausible)
-                .unwrap()
-                .steps()
-                .is_some()
-        })
+        .find(|x| model.at(x, BlendRule::Plausible).unwrap().steps().is_some())
         .expect("a point where the plausible rule moves the weights");
     // `reconstruct` at `at` under `rule`, with `--json` or without; stdout.
     let reconstruct = |rule: BlendRule, at: [f64; 2], json: bool| {
@@ -58,7 +52,7 @@ fn reconstruct_json_is_the_blend_the_library_computes() {
         let stdout = reconstruct(rule, at, true);
         assert_eq!(stdout.lines().count(), 1, "one record: {stdout}");
         let rec: serde_json::Value = serde_json::from_str(&stdout).unwrap();
-        let blend = model.at_with(&at, rule).unwrap();
+        let blend = model.at(&at, rule).unwrap();
         // Every weight by name, as the library has it, and they sum to the stated sum.
         let weights = rec["weights"].as_object().unwrap();
         assert_eq!(weights.len(), model.names().len());
@@ -79,11 +73,11 @@ fn reconstruct_json_is_the_blend_the_library_computes() {
                 }
                 assert_eq!(
                     moved["s"].as_f64().unwrap(),
-                    brdf_atlas_core::floor::FLOOR_SHARE
+                    brdf_atlas_core::soft_floor::FLOOR_SHARE
                 );
                 assert_eq!(
                     moved["d"].as_f64().unwrap(),
-                    brdf_atlas_core::floor::FLOOR_SOFTNESS
+                    brdf_atlas_core::soft_floor::FLOOR_SOFTNESS
                 );
                 let p = blend.plausibility().unwrap();
                 assert_eq!(p.clamped_reflectance, 0.0, "the floor rule clamped {p:?}");
@@ -186,7 +180,7 @@ fn far_from_the_data_the_tools_say_the_model_knows_little() {
         "{stderr}"
     );
     // Near a material: no warning.
-    let model = Model::open(&model_path).unwrap();
+    let model = brdf_atlas_core::Atlas::new(Model::open(&model_path).unwrap());
     let x = [model.latent()[(0, 0)], model.latent()[(0, 1)]];
     let out = brdf_atlas([
         "eval".as_ref(),
@@ -238,7 +232,7 @@ fn an_unknown_blend_rule_is_one_clear_line() {
 fn a_map_shows_the_floor_by_default_the_gp_on_request_and_the_plausible_rule_has_none() {
     let tmp = tempfile::tempdir().unwrap();
     let model_path = fitted(tmp.path());
-    let model = Model::open(&model_path).unwrap();
+    let model = brdf_atlas_core::Atlas::new(Model::open(&model_path).unwrap());
     let map = |blend: Option<&str>, png: &str| {
         let png = tmp.path().join(png);
         let mut args = vec!["map", model_path.to_str().unwrap(), "--size", "48"];
@@ -258,7 +252,11 @@ fn a_map_shows_the_floor_by_default_the_gp_on_request_and_the_plausible_rule_has
     // The map's pixels are the library's map of the floor rule.
     let want = |rule| {
         let view = brdf_atlas_core::View::default();
-        let map = model.albedo_map_with(48, 48, view, None, rule, &brdf_atlas_core::NoProgress);
+        let map = model.map(
+            brdf_atlas_core::MapRequest::new(48, 48)
+                .view(view)
+                .rule(rule),
+        );
         serde_json::to_value(map.unwrap().method).unwrap()
     };
     assert_eq!(want(BlendRule::Floor), floor["method"], "{floor}");

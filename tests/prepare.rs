@@ -34,8 +34,7 @@ fn a_prepared_model_draws_its_maps_from_the_lattice() {
     assert_eq!(sidecar["method"]["kind"], "lattice", "{sidecar}");
     assert_eq!(
         sidecar["method"]["nodes"],
-        Model::open(fx.model())
-            .unwrap()
+        brdf_atlas_core::Atlas::new(Model::open(fx.model()).unwrap())
             .prepared_map()
             .unwrap()
             .expect("the lattice")

@@ -2,10 +2,9 @@
 //! points.
 
 use std::path::PathBuf;
-use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use brdf_atlas_core::{BlendRule, DEFAULT_SAMPLES, Model, NoProgress, View};
+use brdf_atlas_core::{Atlas, BlendRule, DEFAULT_SAMPLES, Model, View};
 use brdf_merl::MerlFile;
 use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArray4};
@@ -29,7 +28,8 @@ const MAX_SAMPLES: usize = 1 << 20;
 /// releases the GIL.
 #[pyclass(module = "brdf_atlas", name = "Model", frozen)]
 pub struct PyModel {
-    inner: Arc<Model>,
+    /// The model and what its maps keep between calls.
+    inner: Atlas,
 }
 
 /// Where a material lands in a model's latent space (`Model.locate`).
@@ -64,7 +64,9 @@ impl Location {
 
 impl PyModel {
     fn blend(&self, x: &[f64], rule: BlendRule) -> Result<OwnedBlend> {
-        Ok(OwnedBlend::try_new(self.inner.clone(), |m| m.at_with(x, rule))?)
+        Ok(OwnedBlend::try_new(self.inner.model().clone(), |m| {
+            m.at(x, rule)
+        })?)
     }
 }
 
@@ -109,7 +111,7 @@ impl PyModel {
     fn new(py: Python<'_>, path: PathBuf) -> PyResult<PyModel> {
         let model = py.detach(|| Model::open(&path)).map_err(Failure::from)?;
         Ok(PyModel {
-            inner: Arc::new(model),
+            inner: Atlas::new(model),
         })
     }
 
@@ -189,7 +191,11 @@ impl PyModel {
         x: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let x = point(x)?;
-        let c = self.inner.at(&x).map_err(Failure::from)?.confidence();
+        let c = self
+            .inner
+            .at(&x, BlendRule::Gp)
+            .map_err(Failure::from)?
+            .confidence();
         let d = PyDict::new(py);
         d.set_item("variance", c.variance)?;
         d.set_item("weight_sum", c.weight_sum)?;
@@ -214,7 +220,7 @@ impl PyModel {
         let x = point(x)?;
         let rule = rule_of(blend)?;
         let p = py.detach(|| {
-            let b = self.inner.at_with(&x, rule)?;
+            let b = self.inner.at(&x, rule)?;
             Ok::<_, Failure>(b.plausibility()?)
         })?;
         let d = PyDict::new(py);
@@ -237,7 +243,11 @@ impl PyModel {
         let (x, rule) = (point(x)?, rule_of(blend)?);
         let label = match rule {
             BlendRule::Floor => format!("at {x:?} of {}", self.inner.path().display()),
-            rule => format!("at {x:?} of {} ({} blend)", self.inner.path().display(), rule.name()),
+            rule => format!(
+                "at {x:?} of {} ({} blend)",
+                self.inner.path().display(),
+                rule.name()
+            ),
         };
         let b = py.detach(|| self.blend(&x, rule))?;
         Ok(PyMaterial::new(Source::Blend(b), label))
@@ -258,7 +268,7 @@ impl PyModel {
     ) -> PyResult<Bound<'py, PyArray4<f64>>> {
         let (x, rule) = (point(x)?, rule_of(blend)?);
         let t = py.detach(|| {
-            let t = self.inner.at_with(&x, rule)?.table()?;
+            let t = self.inner.at(&x, rule)?.table()?;
             Ok::<_, Failure>((t.dims(), table_values(&t, raw)))
         })?;
         Ok(table_array(py, t))
@@ -328,8 +338,12 @@ impl PyModel {
         };
         let map = py
             .detach(|| {
-                self.inner
-                    .albedo_map_with(width, height, view, samples, rule, &NoProgress)
+                self.inner.map(
+                    brdf_atlas_core::MapRequest::new(width, height)
+                        .view(view)
+                        .samples(samples)
+                        .rule(rule),
+                )
             })
             .map_err(Failure::from)?;
         let flat: Vec<f32> = map.rgb.iter().flatten().copied().collect();
@@ -363,7 +377,7 @@ impl PyModel {
         };
         let located = py.detach(|| {
             let file = MerlFile::open(&path)?;
-            Ok::<_, Failure>(self.inner.locate(&file)?)
+            Ok::<_, Failure>(brdf_atlas_core::Located::find(&self.inner, &file)?)
         })?;
         let names = self.inner.names();
         Ok(Location {

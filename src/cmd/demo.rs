@@ -51,7 +51,7 @@ struct State<'a> {
     /// Their summaries (set by [`summarise`]).
     summaries: Vec<Summary>,
     /// The fitted model (set by [`fit_model`]).
-    model: Option<Model>,
+    model: Option<brdf_atlas_core::Atlas>,
     /// The two materials the reconstruction lies between (set by [`reconstruct_between`]).
     between: Option<(String, String)>,
 }
@@ -176,7 +176,7 @@ fn fit_model(state: &mut State) -> Result<(), Error> {
     let args = fit::Args::new(merl_dir(state.args), state.args.dir.join(MODEL));
     let fitted = fit::fit(&args)?;
     indented(|out| Ok(fit::write_summary(out, &args, &fitted)?))?;
-    state.model = Some(Model::open(&args.model)?);
+    state.model = Some(brdf_atlas_core::Atlas::new(Model::open(&args.model)?));
     Ok(())
 }
 

@@ -50,7 +50,7 @@ pub fn locate(model: &Model, path: &Path) -> Result<Found, Error> {
         });
     }
     let file = MerlFile::open(path)?;
-    let located = model.locate(&file)?;
+    let located = brdf_atlas_core::Located::find(model, &file)?;
     let truth = file.to_table();
     let there = fidelity::judge_at(model, &located.point, &truth)?;
     let &(i, _) = located.nearest.first().expect("a model has materials");

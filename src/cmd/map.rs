@@ -126,7 +126,11 @@ fn check_extensions(args: &Args) -> Result<(), Error> {
 }
 
 /// Compute the map and write every output; report what was done.
-pub fn draw(model: &Model, args: &Args, report: &mut impl Write) -> Result<(), Error> {
+pub fn draw(
+    model: &brdf_atlas_core::Atlas,
+    args: &Args,
+    report: &mut impl Write,
+) -> Result<(), Error> {
     check_extensions(args)?;
     if model.q() != 2 {
         return Err(Error::Input(format!(
@@ -151,7 +155,13 @@ pub fn draw(model: &Model, args: &Args, report: &mut impl Write) -> Result<(), E
     let t0 = Instant::now();
     let bars = Bars::new("preparing the map");
     let size = args.size as usize;
-    let map = model.albedo_map_with(size, size, view, samples, args.blend, &bars)?;
+    let map = model.map(
+        brdf_atlas_core::MapRequest::new(size, size)
+            .view(view)
+            .samples(samples)
+            .rule(args.blend)
+            .progress(&bars),
+    )?;
     drop(bars);
     let elapsed = t0.elapsed();
     let blend = match map.blend {
@@ -261,7 +271,7 @@ pub fn draw(model: &Model, args: &Args, report: &mut impl Write) -> Result<(), E
 pub fn run(args: &Args) -> Result<ExitCode, Error> {
     // Before the model is read: a misnamed output is quick to tell.
     check_extensions(args)?;
-    let model = Model::open(&args.model)?;
+    let model = brdf_atlas_core::Atlas::new(Model::open(&args.model)?);
     if let Err(e) = model.prepared_map() {
         eprintln!("note: {e}; the map is drawn without it");
     }

@@ -59,7 +59,7 @@ fn tolerance(s: &str) -> Result<f64, String> {
 
 /// Run `prepare`.
 pub fn run(args: &Args) -> Result<ExitCode, Error> {
-    let model = Model::open(&args.model)?;
+    let model = brdf_atlas_core::Atlas::new(Model::open(&args.model)?);
     let t0 = Instant::now();
     let bars = Bars::new("preparing the map");
     let lattice = model.prepare_map(args.blend, args.tolerance, &bars)?;

@@ -53,7 +53,7 @@ pub fn write(
     report: &mut impl Write,
 ) -> Result<(), Error> {
     let t0 = Instant::now();
-    let blend = model.at_with(x, rule)?;
+    let blend = model.at(x, rule)?;
     // The table and its plausibility figures from one pass over the store.
     let (table, plausibility) = blend.table_and_plausibility()?;
     table.write(out)?;
@@ -90,7 +90,7 @@ pub fn write(
             report,
             "  (the GP's weights: the {} rule lifts each value softly onto a floor at {} times a convex blend's)",
             rule.name(),
-            brdf_atlas_core::floor::FLOOR_SHARE
+            brdf_atlas_core::soft_floor::FLOOR_SHARE
         )?;
     }
     let confidence = blend.confidence();
@@ -197,8 +197,8 @@ pub fn record(
                 "rule": "each value is c h(g / c), g its value under the weights above, c under towards, \
                          h(r) = s + d ln(1 + e^((r - s) / d))",
                 "towards": by_name(towards),
-                "s": brdf_atlas_core::floor::FLOOR_SHARE,
-                "d": brdf_atlas_core::floor::FLOOR_SOFTNESS,
+                "s": brdf_atlas_core::soft_floor::FLOOR_SHARE,
+                "d": brdf_atlas_core::soft_floor::FLOOR_SOFTNESS,
             })
         })
     });
@@ -223,7 +223,7 @@ pub fn record(
 pub fn run(args: &Args) -> Result<ExitCode, Error> {
     let (model, x) = args.target.open()?;
     if args.json {
-        let blend = model.at_with(x, args.target.blend)?;
+        let blend = model.at(x, args.target.blend)?;
         blend.table()?.write(&args.out)?;
         let mut rec = record(&model, args.target.blend, &blend)?;
         rec["output"] = json!(args.out.display().to_string());

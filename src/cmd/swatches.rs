@@ -119,7 +119,7 @@ pub fn run(args: &Args) -> Result<ExitCode, Error> {
             args.png.display()
         )));
     }
-    let model = Model::open(&args.model)?;
+    let model = brdf_atlas_core::Atlas::new(Model::open(&args.model)?);
     if model.q() != 2 {
         return Err(Error::Input(format!(
             "{}: swatches need a 2-D latent space, this model has q = {} (fit with --q 2)",

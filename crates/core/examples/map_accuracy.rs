@@ -12,8 +12,8 @@
 
 use std::time::Instant;
 
-use brdf_atlas_core::measure::reference_albedo;
-use brdf_atlas_core::{AlbedoMap, AlbedoMethod, BlendRule, Model, NoProgress, View};
+use brdf_atlas_core::map_error::reference_albedo;
+use brdf_atlas_core::{AlbedoMap, AlbedoMethod, BlendRule, Model, View};
 
 const SIDE: usize = 1024;
 
@@ -76,7 +76,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Some(name) => BlendRule::parse(&name).ok_or("RULE: floor or gp")?,
         None => BlendRule::default(),
     };
-    let model = Model::open(&path)?;
+    let model = brdf_atlas_core::Atlas::new(Model::open(&path)?);
     let views = [
         ("default", View::default()),
         ("1/100", View::zoomed_hundredfold()),
@@ -96,15 +96,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .collect::<Result<Vec<_>, _>>()?;
         for samples in [Some(16), Some(64), Some(256), Some(1024), Some(4096), None] {
             // A fresh model for each, so that "first" includes what a map builds.
-            let fresh = Model::open(&path)?;
+            let fresh = brdf_atlas_core::Atlas::new(Model::open(&path)?);
             // Full 1024 x 1024 maps for the default and the default sample count only.
             let timed = samples.is_none_or(|s| s == brdf_atlas_core::DEFAULT_SAMPLES);
             let (map, first, again) = if timed {
                 let t = Instant::now();
-                let map = fresh.albedo_map_with(SIDE, SIDE, view, samples, rule, &NoProgress)?;
+                let map = fresh.map(
+                    brdf_atlas_core::MapRequest::new(SIDE, SIDE)
+                        .view(view)
+                        .samples(samples)
+                        .rule(rule),
+                )?;
                 let first = t.elapsed().as_secs_f64();
                 let t = Instant::now();
-                fresh.albedo_map_with(SIDE, SIDE, view, samples, rule, &NoProgress)?;
+                fresh.map(
+                    brdf_atlas_core::MapRequest::new(SIDE, SIDE)
+                        .view(view)
+                        .samples(samples)
+                        .rule(rule),
+                )?;
                 (map, first, t.elapsed().as_secs_f64())
             } else {
                 // Each pixel's value under the per-pixel rule is the same at
@@ -119,7 +129,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                             y0: x[1] - d,
                             y1: x[1] + d,
                         };
-                        let m = fresh.albedo_map_with(1, 1, v, samples, rule, &NoProgress)?;
+                        let m = fresh.map(
+                            brdf_atlas_core::MapRequest::new(1, 1)
+                                .view(v)
+                                .samples(samples)
+                                .rule(rule),
+                        )?;
                         Ok(m.rgb[0].map(f64::from))
                     })
                     .collect::<Result<Vec<_>, Box<dyn std::error::Error>>>()?;

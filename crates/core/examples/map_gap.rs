@@ -19,7 +19,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = args.next().ok_or("usage: map_gap MODEL [POINTS] [SEED]")?;
     let count: usize = args.next().map_or(Ok(100), |s| s.parse())?;
     let seed: u64 = args.next().map_or(Ok(1), |s| s.parse())?;
-    let model = Model::open(&path)?;
+    let model = brdf_atlas_core::Atlas::new(Model::open(&path)?);
     let view = View::default();
     let mut rng = SplitMix64::new(seed);
     let points: Vec<Vec<f64>> = (0..count)
@@ -34,7 +34,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let rule = model.albedo_rule();
     let mut gaps = Vec::with_capacity(count);
     for (x, blend) in points.iter().zip(&plausible) {
-        let gp_table = model.at(x)?.table()?;
+        let gp_table = model.at(x, brdf_atlas_core::BlendRule::Gp)?.table()?;
         let table = blend.table()?;
         let gp = rule.integrate(|b| gp_table.rgb_or_zero(b));
         let pl = rule.integrate(|b| table.rgb_or_zero(b));

@@ -22,7 +22,7 @@ fn albedos(model: &Model, x: [f64; 2]) -> Result<[[f64; 3]; 3], Box<dyn std::err
     let mut out = [[0.0f64; 3]; 3];
     let mut values = vec![0.0f64; rows];
     for (k, blend_rule) in [BlendRule::Gp, BlendRule::Floor].into_iter().enumerate() {
-        let blend = model.at_with(&x, blend_rule)?;
+        let blend = model.at(&x, blend_rule)?;
         blend.transformed_rows(0, &mut values);
         for (&b, &w) in rule.bins().iter().zip(rule.weights()) {
             let b = b as usize;

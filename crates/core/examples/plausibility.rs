@@ -21,7 +21,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .ok_or("usage: plausibility MODEL [POINTS] [SEED]")?;
     let points: usize = args.next().map_or(Ok(200), |s| s.parse())?;
     let seed: u64 = args.next().map_or(Ok(1), |s| s.parse())?;
-    let model = Model::open(&path)?;
+    let model = brdf_atlas_core::Atlas::new(Model::open(&path)?);
     if points > 0 {
         sweep(&model, points, seed)?;
     }
@@ -119,7 +119,11 @@ fn leave_one_out(model: &Model) -> Result<(), Box<dyn std::error::Error>> {
 }
 
 /// Plausibility at `points` random points of the default view, per rule.
-fn sweep(model: &Model, points: usize, seed: u64) -> Result<(), Box<dyn std::error::Error>> {
+fn sweep(
+    model: &brdf_atlas_core::Atlas,
+    points: usize,
+    seed: u64,
+) -> Result<(), Box<dyn std::error::Error>> {
     let view = View::default();
     let mut rng = SplitMix64::new(seed);
     let xs: Vec<[f64; 2]> = (0..points)
@@ -140,7 +144,7 @@ fn sweep(model: &Model, points: usize, seed: u64) -> Result<(), Box<dyn std::err
             .zip(model.plausibilities(&xs, rule, loo::Every::BIN)?)
         {
             if p.max_albedo > 1.0 && std::env::var_os("PLAUSIBILITY_SHOW").is_some() {
-                let b = model.at(x)?;
+                let b = model.at(x, brdf_atlas_core::BlendRule::Gp)?;
                 let w = b.gp_weights();
                 let mut idx: Vec<usize> = (0..w.len()).collect();
                 idx.sort_by(|&a, &c| w[c].abs().total_cmp(&w[a].abs()));
@@ -161,7 +165,12 @@ fn sweep(model: &Model, points: usize, seed: u64) -> Result<(), Box<dyn std::err
             refl.push(p.clamped_reflectance);
             vals.push(p.clamped_values);
             alb.push(p.max_albedo);
-            low += usize::from(model.at(x)?.confidence().is_low());
+            low += usize::from(
+                model
+                    .at(x, brdf_atlas_core::BlendRule::Gp)?
+                    .confidence()
+                    .is_low(),
+            );
         }
         println!(
             "{} ({} points, {:.1} s):",

@@ -10,14 +10,14 @@
 //! - **exact albedo pass**: the dense albedo rule's rows (all channels,
 //!   measured rows only) gathered in blocks of 256 and multiplied by the
 //!   weights of `POINTS` latent points ([`brdf_atlas_core::dense::product::matmul`],
-//!   the kernel of `Model::exact_albedos`);
+//!   the kernel of `Atlas::exact_albedos`);
 //! - **Gram matrix**: `Z^T Z` over blocks of 512 rows laid out
 //!   material-major ([`brdf_atlas_core::dense::gram32::syrk_lower_add_f32`],
 //!   the kernel of `Store::gram` and of the fit's store pass).
 //!
 //! Each timed map run maps the store afresh (a host that opens a model pays
 //! the page faults once); the library's own entry points (`Blend::table`,
-//! `Model::exact_albedos_with`, `Store::gram`) are timed too, on a map of
+//! `Atlas::exact_albedos`, `Store::gram`) are timed too, on a map of
 //! their own, to show the prototypes do the same work.
 //!
 //! ```sh
@@ -225,7 +225,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let runs: usize = args.next().map_or(Ok(5), |s| s.parse())?;
     let block_mb: f64 = args.next().map_or(Ok(4.0), |s| s.parse())?;
     let m: usize = args.next().map_or(Ok(64), |s| s.parse())?;
-    let model = Model::open(&path)?;
+    let model = brdf_atlas_core::Atlas::new(Model::open(&path)?);
     let store = model.store();
     let (n, rows) = (store.n(), store.rows());
     let z = store.len_bytes() - (rows * n * 4) as u64;
@@ -267,7 +267,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .collect();
     let blends: Vec<Vec<f64>> = points
         .iter()
-        .map(|p| model.at(p).map(|b| b.gp_weights().to_vec()))
+        .map(|p| {
+            model
+                .at(p, brdf_atlas_core::BlendRule::Gp)
+                .map(|b| b.gp_weights().to_vec())
+        })
         .collect::<Result<_, _>>()?;
     let a: Vec<f64> = (0..n)
         .flat_map(|t| blends.iter().map(move |w| w[t]))
@@ -329,20 +333,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
     }
     // The library's own entry points, on their own map, for scale.
-    let m2 = Model::open(&path)?;
+    let m2 = brdf_atlas_core::Atlas::new(Model::open(&path)?);
     let (t, _) = time(runs, || {
-        m2.at(&points[m / 2])
+        m2.at(&points[m / 2], brdf_atlas_core::BlendRule::Gp)
             .and_then(|b| b.table())
             .map(|t| t.raw()[0])
             .unwrap_or(0.0)
     });
     println!("library: Blend::table {t:.3} s (the same map every run)");
     let (t, _) = time(runs, || {
-        m2.exact_albedos_with(&points, BlendRule::Gp)
-            .map(|v| v[0][0])
-            .unwrap_or(0.0)
+        m2.exact_albedos(
+            &points,
+            brdf_atlas_core::AlbedoRequest::new().rule(BlendRule::Gp),
+        )
+        .map(|v| v[0][0])
+        .unwrap_or(0.0)
     });
-    println!("library: Model::exact_albedos_with(gp) {t:.3} s");
+    println!("library: Atlas::exact_albedos(gp) {t:.3} s");
     let (t, _) = time(runs, || m2.store().gram(&NoProgress)[(0, 0)]);
     println!("library: Store::gram {t:.3} s");
     Ok(())

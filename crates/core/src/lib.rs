@@ -9,13 +9,16 @@
 //!   with Hooke-Jeeves (O(N^2) per trial through Sherman-Morrison and
 //!   determinant-lemma updates) or L-BFGS;
 //! - `model`: a [`Model`] is the fitted latent space beside its store, as a
-//!   versioned file ([`ModelFile`]) or in memory;
+//!   versioned file ([`ModelFile`]) or in memory; it answers the material at
+//!   a latent point under a rule (`model::blend`: [`Blend`], [`BlendRule`],
+//!   [`Plausibility`], the [`soft_floor`]);
 //! - `fit`: [`fit_dir`] runs the whole pipeline, from a directory of MERL
 //!   files to a model on disk whose materials are judged at their own
 //!   points ([`fidelity`]);
-//! - `query`: what a model answers: a material at a latent point
-//!   ([`Blend`]), where a new material lands ([`Located`]), albedo maps
-//!   ([`AlbedoMap`]) and their contours ([`contours`]; their pictures are
+//! - `locate`: where a new material lands ([`Located`]);
+//! - `maps`: albedo maps ([`AlbedoMap`]), the exact albedos and
+//!   [`albedo_field`]s they are built from, the prepared map
+//!   ([`AlbedoLattice`]) and contours ([`contours`]; their pictures are
 //!   drawn by the `brdf-atlas-pictures` crate);
 //! - `eval`: leave-one-out errors ([`loo`]) and how each material comes
 //!   back at its own point and left out ([`fidelity`]);
@@ -23,12 +26,12 @@
 //!   detected once).
 //!
 //! ```no_run
-//! use brdf_atlas_core::{Model, View};
+//! use brdf_atlas_core::{Atlas, BlendRule, MapRequest, Model, View};
 //!
-//! let model = Model::open("atlas.model")?;
-//! let material = model.at(&[0.3, -0.5])?;
+//! let atlas = Atlas::new(Model::open("atlas.model")?);
+//! let material = atlas.model().at(&[0.3, -0.5], BlendRule::Gp)?;
 //! let table = material.table()?;
-//! let map = model.albedo_map(256, 256, View::default(), None, &brdf_atlas_core::NoProgress)?;
+//! let map = atlas.map(MapRequest::new(256, 256).view(View::default()))?;
 //! # let _ = (table, map);
 //! # Ok::<(), brdf_atlas_core::CoreError>(())
 //! ```
@@ -42,9 +45,10 @@ mod fit;
 mod gplvm;
 pub mod heap;
 pub mod limits;
+mod locate;
+mod maps;
 mod model;
 mod progress;
-mod query;
 pub mod simd;
 
 pub use data::{Dataset, Precision, Rows, Store, StoreIdentity, TransformKind, build_store};
@@ -56,15 +60,17 @@ pub use fit::{
 };
 pub use gplvm::optim;
 pub use gplvm::{CheckedParams, DriftStats, Fit, GplvmParams, GramData, Kernel, OptimizerKind};
+pub use locate::Located;
+pub use maps::{
+    AlbedoField, AlbedoLattice, AlbedoMap, AlbedoMethod, AlbedoRequest, Atlas, DEFAULT_SAMPLES,
+    FieldRequest, Integration, LATTICE_TOLERANCE, MapRequest, NODE_PHI_D_STEP, Segment, View,
+    contour_levels, contours, lattice_path, luminance,
+};
+pub use maps::{albedo_field, map_error};
+pub use model::blend::soft_floor;
+pub use model::blend::{Blend, BlendRule, Confidence, LOW_CONFIDENCE_VARIANCE, Plausibility};
 pub use model::{FitRecord, InputIdentity, Model, ModelFile, StoreRef, store_path_for};
 pub use progress::{NoProgress, Progress};
-pub use query::measure;
-pub use query::{
-    AlbedoLattice, AlbedoMap, AlbedoMethod, Blend, BlendRule, Confidence, DEFAULT_SAMPLES,
-    LATTICE_TOLERANCE, LOW_CONFIDENCE_VARIANCE, Located, NODE_PHI_D_STEP, Plausibility, Segment,
-    View, contour_levels, contours, lattice_path, luminance,
-};
-pub use query::{field, floor};
 pub use simd::fastlog;
 
 /// The SIGBUS handler that keeps a store truncated under its map from

@@ -11,7 +11,7 @@ use std::time::{Duration, SystemTime};
 
 use brdf_atlas_core::{
     CoreError, FitOptions, GplvmParams, Model, NoProgress, Precision, Progress, TransformKind,
-    View, fit_dir, store_path_for,
+    fit_dir, store_path_for,
 };
 use brdf_merl::{Dims, MerlError, synth};
 
@@ -66,17 +66,25 @@ fn a_store_truncated_after_open_gives_file_changed_until_reopened() {
     let path = fitted(tmp.path());
     let store = store_path_for(&path);
     let bytes = std::fs::read(&store).unwrap();
-    let m = Model::open(&path).unwrap();
+    let m = brdf_atlas_core::Atlas::new(Model::open(&path).unwrap());
     let x = [0.2, -0.4];
-    let want = m.at(&x).unwrap().table().unwrap();
+    let want = m
+        .at(&x, brdf_atlas_core::BlendRule::Gp)
+        .unwrap()
+        .table()
+        .unwrap();
     truncate(&store, 100);
-    let e = m.at(&x).unwrap().table().unwrap_err();
+    let e = m
+        .at(&x, brdf_atlas_core::BlendRule::Gp)
+        .unwrap()
+        .table()
+        .unwrap_err();
     assert!(is_changed(&e, &store), "{e}");
     // Every later query refuses, with the same error.
     for e in [
-        m.at(&x).err().unwrap(),
+        m.at(&x, brdf_atlas_core::BlendRule::Gp).err().unwrap(),
         m.verify().unwrap_err(),
-        m.albedo_map(8, 8, View::default(), Some(4), &NoProgress)
+        m.map(brdf_atlas_core::MapRequest::new(8, 8).samples(Some(4)))
             .unwrap_err(),
     ] {
         assert!(is_changed(&e, &store), "{e}");
@@ -84,8 +92,16 @@ fn a_store_truncated_after_open_gives_file_changed_until_reopened() {
     drop(m);
     // The file restored, a reopened model answers as before.
     std::fs::write(&store, &bytes).unwrap();
-    let again = Model::open(&path).unwrap();
-    assert_eq!(again.at(&x).unwrap().table().unwrap().raw(), want.raw());
+    let again = brdf_atlas_core::Atlas::new(Model::open(&path).unwrap());
+    assert_eq!(
+        again
+            .at(&x, brdf_atlas_core::BlendRule::Gp)
+            .unwrap()
+            .table()
+            .unwrap()
+            .raw(),
+        want.raw()
+    );
 }
 
 #[test]
@@ -93,18 +109,26 @@ fn a_store_rewritten_at_the_same_size_gives_file_changed() {
     let tmp = tempfile::tempdir().unwrap();
     let path = fitted(tmp.path());
     let store = store_path_for(&path);
-    let m = Model::open(&path).unwrap();
+    let m = brdf_atlas_core::Atlas::new(Model::open(&path).unwrap());
     let x = [0.5, 0.1];
-    let table = m.at(&x).unwrap().table().unwrap();
+    let table = m
+        .at(&x, brdf_atlas_core::BlendRule::Gp)
+        .unwrap()
+        .table()
+        .unwrap();
     // `cp other m.atlas.store`: truncate and write the same length, in place.
     let mut bytes = std::fs::read(&store).unwrap();
     let last = bytes.len() - 1;
     bytes[last] ^= 0x40;
     std::fs::write(&store, &bytes).unwrap();
-    let e = m.at(&x).unwrap().table().unwrap_err();
+    let e = m
+        .at(&x, brdf_atlas_core::BlendRule::Gp)
+        .unwrap()
+        .table()
+        .unwrap_err();
     assert!(is_changed(&e, &store), "{e}");
     // Point queries return plain numbers; verify says they are not to be used.
-    let blend_error = m.at(&x).err().unwrap();
+    let blend_error = m.at(&x, brdf_atlas_core::BlendRule::Gp).err().unwrap();
     assert!(is_changed(&blend_error, &store), "{blend_error}");
     assert!(is_changed(&m.verify().unwrap_err(), &store));
     let _ = table;
@@ -117,13 +141,24 @@ fn a_store_replaced_by_rename_leaves_the_open_model_answering() {
     let tmp = tempfile::tempdir().unwrap();
     let path = fitted(tmp.path());
     let store = store_path_for(&path);
-    let m = Model::open(&path).unwrap();
+    let m = brdf_atlas_core::Atlas::new(Model::open(&path).unwrap());
     let x = [-0.3, 0.3];
-    let want = m.at(&x).unwrap().table().unwrap();
+    let want = m
+        .at(&x, brdf_atlas_core::BlendRule::Gp)
+        .unwrap()
+        .table()
+        .unwrap();
     let copy = tmp.path().join("copy");
     std::fs::write(&copy, b"something else").unwrap();
     std::fs::rename(&copy, &store).unwrap();
-    assert_eq!(m.at(&x).unwrap().table().unwrap().raw(), want.raw());
+    assert_eq!(
+        m.at(&x, brdf_atlas_core::BlendRule::Gp)
+            .unwrap()
+            .table()
+            .unwrap()
+            .raw(),
+        want.raw()
+    );
     m.verify().unwrap();
 }
 
@@ -132,11 +167,16 @@ fn a_truncation_during_reconstructions_on_other_threads_never_gives_garbage() {
     let tmp = tempfile::tempdir().unwrap();
     let path = fitted(tmp.path());
     let store = store_path_for(&path);
-    let m = Model::open(&path).unwrap();
+    let m = brdf_atlas_core::Atlas::new(Model::open(&path).unwrap());
     let points = [[0.1, 0.2], [-0.7, 0.4], [0.9, -0.9]];
     let want: Vec<_> = points
         .iter()
-        .map(|x| m.at(x).unwrap().table().unwrap())
+        .map(|x| {
+            m.at(x, brdf_atlas_core::BlendRule::Gp)
+                .unwrap()
+                .table()
+                .unwrap()
+        })
         .collect();
     let started = AtomicUsize::new(0);
     let truncated = AtomicBool::new(false);
@@ -150,7 +190,10 @@ fn a_truncation_during_reconstructions_on_other_threads_never_gives_garbage() {
                 // Until a call fails: each is the right table or FileChanged.
                 loop {
                     let after = truncated.load(Ordering::Acquire);
-                    match m.at(x).and_then(|b| b.table()) {
+                    match m
+                        .at(x, brdf_atlas_core::BlendRule::Gp)
+                        .and_then(|b| b.table())
+                    {
                         Ok(t) => assert_eq!(t.raw(), want.raw(), "garbage from a changed store"),
                         Err(e) => {
                             assert!(is_changed(&e, store), "{e}");
@@ -241,5 +284,5 @@ fn an_input_truncated_during_a_fit_fails_it_and_keeps_the_old_model() {
         .filter(|n| n.contains(".tmp-"))
         .collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");
-    Model::open(&path).unwrap();
+    brdf_atlas_core::Atlas::new(Model::open(&path).unwrap());
 }

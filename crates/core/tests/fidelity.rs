@@ -117,8 +117,8 @@ fn own_point_and_held_out_figures_equal_a_dense_recomputation() {
             // The default rule's material and the GP's at the point, as
             // `reconstruct` writes them.
             for (judged, blend, rule_name) in [
-                (&f.own[i], m.at_with(&x, BlendRule::Floor).unwrap(), "floor"),
-                (&f.own_gp[i], m.at_with(&x, BlendRule::Gp).unwrap(), "gp"),
+                (&f.own[i], m.at(&x, BlendRule::Floor).unwrap(), "floor"),
+                (&f.own_gp[i], m.at(&x, BlendRule::Gp).unwrap(), "gp"),
             ] {
                 let table = blend.table().unwrap();
                 let got = rule.albedo(&table);
@@ -216,8 +216,8 @@ fn the_default_rule_keeps_a_material_at_its_own_point() {
                 .join(format!("{}-{}", transform.name(), kernel.length_scale));
             let m = fit_materials(&sub, &materials, DIMS, transform, kernel);
             let x = [m.latent()[(i, 0)], m.latent()[(i, 1)]];
-            let floor = rule.albedo(&m.at_with(&x, BlendRule::Floor).unwrap().table().unwrap());
-            let gp = rule.albedo(&m.at_with(&x, BlendRule::Gp).unwrap().table().unwrap());
+            let floor = rule.albedo(&m.at(&x, BlendRule::Floor).unwrap().table().unwrap());
+            let gp = rule.albedo(&m.at(&x, BlendRule::Gp).unwrap().table().unwrap());
             for c in 0..3 {
                 let (ef, eg) = (
                     (floor[c] / want[c] - 1.0).abs(),

@@ -10,7 +10,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use brdf_atlas_core::measure::reference_albedo;
+use brdf_atlas_core::map_error::reference_albedo;
 use brdf_atlas_core::{
     AlbedoMap, AlbedoMethod, BlendRule, CoreError, FitOptions, GplvmParams, Model, NoProgress,
     Precision, Progress, TransformKind, View, fit_dir,
@@ -68,7 +68,7 @@ fn worst_error(model: &Model, map: &AlbedoMap, pixels: &[(usize, usize)]) -> f64
 }
 
 /// Largest difference of the map's variance from the exact variance map.
-fn variance_error(model: &Model, map: &AlbedoMap) -> f64 {
+fn variance_error(model: &brdf_atlas_core::Atlas, map: &AlbedoMap) -> f64 {
     let exact = model.variance_map(map.width, map.height, map.view).unwrap();
     exact
         .iter()
@@ -91,7 +91,8 @@ fn zoomed(c: [f64; 2], zoom: f64) -> View {
 #[test]
 fn field_map_is_within_one_percent_of_the_dense_rule_at_every_zoom() {
     let tmp = tempfile::tempdir().unwrap();
-    let model = Model::open(fit(tmp.path(), 12, TransformKind::Log)).unwrap();
+    let model =
+        brdf_atlas_core::Atlas::new(Model::open(fit(tmp.path(), 12, TransformKind::Log)).unwrap());
     let side = 96;
     let latent = model.latent();
     let views = [
@@ -110,7 +111,7 @@ fn field_map_is_within_one_percent_of_the_dense_rule_at_every_zoom() {
     let mut fields = 0;
     for (k, view) in views.into_iter().enumerate() {
         let map = model
-            .albedo_map(side, side, view, None, &NoProgress)
+            .map(brdf_atlas_core::MapRequest::new(side, side).view(view))
             .unwrap();
         let worst = worst_error(&model, &map, &random_pixels(side, 40, 7 + k as u64));
         match map.method {
@@ -152,18 +153,20 @@ fn a_fresh_model_and_one_that_cached_the_field_draw_the_same_map() {
     let path = fit(tmp.path(), 8, TransformKind::Log);
     let view = zoomed([0.3, 0.2], 100.0);
     let draw = |threads: usize| {
-        let model = Model::open(&path).unwrap();
+        let model = brdf_atlas_core::Atlas::new(Model::open(&path).unwrap());
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .unwrap();
         pool.install(|| {
             // The default view first (cached), then the zoomed one.
-            model
-                .albedo_map(32, 32, View::default(), None, &NoProgress)
+            model.map(brdf_atlas_core::MapRequest::new(32, 32)).unwrap();
+            let a = model
+                .map(brdf_atlas_core::MapRequest::new(40, 40).view(view))
                 .unwrap();
-            let a = model.albedo_map(40, 40, view, None, &NoProgress).unwrap();
-            let b = model.albedo_map(40, 40, view, None, &NoProgress).unwrap();
+            let b = model
+                .map(brdf_atlas_core::MapRequest::new(40, 40).view(view))
+                .unwrap();
             assert_eq!(a.rgb, b.rgb);
             a
         })
@@ -176,9 +179,12 @@ fn a_fresh_model_and_one_that_cached_the_field_draw_the_same_map() {
 #[test]
 fn exact_albedos_are_the_dense_rule_on_the_full_reconstruction() {
     let tmp = tempfile::tempdir().unwrap();
-    let model = Model::open(fit(tmp.path(), 6, TransformKind::Log)).unwrap();
+    let model =
+        brdf_atlas_core::Atlas::new(Model::open(fit(tmp.path(), 6, TransformKind::Log)).unwrap());
     let points = [[0.0, 0.0], [0.9, -0.4], [-1.05, 1.1], [2.0, 0.5]];
-    let got = model.exact_albedos(&points).unwrap();
+    let got = model
+        .exact_albedos(&points, brdf_atlas_core::AlbedoRequest::new())
+        .unwrap();
     for (x, g) in points.iter().zip(&got) {
         let want = reference_albedo(&model, x, BlendRule::default(), model.albedo_rule()).unwrap();
         for c in 0..3 {
@@ -188,7 +194,11 @@ fn exact_albedos_are_the_dense_rule_on_the_full_reconstruction() {
             );
         }
     }
-    assert!(model.exact_albedos(&[[f64::NAN, 0.0]]).is_err());
+    assert!(
+        model
+            .exact_albedos(&[[f64::NAN, 0.0]], brdf_atlas_core::AlbedoRequest::new())
+            .is_err()
+    );
 }
 
 #[test]
@@ -196,10 +206,18 @@ fn exact_albedos_by_a_rule_are_its_reference_albedos() {
     let tmp = tempfile::tempdir().unwrap();
     let points = [[0.0, 0.0], [0.9, -0.4], [-1.05, 1.1], [2.0, 0.5]];
     for transform in [TransformKind::Log, TransformKind::Raw] {
-        let model = Model::open(fit(tmp.path(), 6, transform)).unwrap();
+        let model =
+            brdf_atlas_core::Atlas::new(Model::open(fit(tmp.path(), 6, transform)).unwrap());
         let rule = Quadrature::dense(model.dims(), 1);
         for blend in [BlendRule::Floor, BlendRule::Gp] {
-            let got = model.exact_albedos_by(&points, blend, &rule).unwrap();
+            let got = model
+                .exact_albedos(
+                    &points,
+                    brdf_atlas_core::AlbedoRequest::new()
+                        .rule(blend)
+                        .integration(brdf_atlas_core::Integration::Rule(&rule)),
+                )
+                .unwrap();
             for (x, g) in points.iter().zip(&got) {
                 let want = reference_albedo(&model, x, blend, &rule).unwrap();
                 for c in 0..3 {
@@ -213,12 +231,22 @@ fn exact_albedos_by_a_rule_are_its_reference_albedos() {
         let other = Quadrature::dense(Dims::new(4, 4, 8).unwrap(), 1);
         assert!(
             model
-                .exact_albedos_by(&points, BlendRule::Gp, &other)
+                .exact_albedos(
+                    &points,
+                    brdf_atlas_core::AlbedoRequest::new()
+                        .rule(BlendRule::Gp)
+                        .integration(brdf_atlas_core::Integration::Rule(&other))
+                )
                 .is_err()
         );
         assert!(
             model
-                .exact_albedos_by(&points, BlendRule::Plausible, &rule)
+                .exact_albedos(
+                    &points,
+                    brdf_atlas_core::AlbedoRequest::new()
+                        .rule(BlendRule::Plausible)
+                        .integration(brdf_atlas_core::Integration::Rule(&rule))
+                )
                 .is_err()
         );
     }
@@ -227,20 +255,29 @@ fn exact_albedos_by_a_rule_are_its_reference_albedos() {
 #[test]
 fn a_raw_models_gp_map_is_the_exact_linear_one_and_its_floor_map_is_not() {
     let tmp = tempfile::tempdir().unwrap();
-    let model = Model::open(fit(tmp.path(), 6, TransformKind::Raw)).unwrap();
+    let model =
+        brdf_atlas_core::Atlas::new(Model::open(fit(tmp.path(), 6, TransformKind::Raw)).unwrap());
     let (view, rule) = (View::default(), BlendRule::Gp);
     let gp = model
-        .albedo_map_with(24, 24, view, None, rule, &NoProgress)
+        .map(
+            brdf_atlas_core::MapRequest::new(24, 24)
+                .view(view)
+                .rule(rule),
+        )
         .unwrap();
     assert_eq!((gp.method, gp.blend), (AlbedoMethod::Linear, BlendRule::Gp));
     // The soft floor is not linear in the weights: the default map of a raw
     // model integrates its material; in a small view with a field, within
     // the field's accuracy.
-    let floor = model.albedo_map(24, 24, view, None, &NoProgress).unwrap();
+    let floor = model
+        .map(brdf_atlas_core::MapRequest::new(24, 24).view(view))
+        .unwrap();
     assert_ne!(floor.method, AlbedoMethod::Linear);
     assert_eq!(floor.blend, BlendRule::Floor);
     let small = zoomed([0.137, -0.291], 100.0);
-    let floor = model.albedo_map(24, 24, small, None, &NoProgress).unwrap();
+    let floor = model
+        .map(brdf_atlas_core::MapRequest::new(24, 24).view(small))
+        .unwrap();
     assert!(
         matches!(floor.method, AlbedoMethod::Field { .. }),
         "{:?}",
@@ -252,7 +289,7 @@ fn a_raw_models_gp_map_is_the_exact_linear_one_and_its_floor_map_is_not() {
 
 #[test]
 fn a_views_domain_holds_it_and_is_at_most_four_times_its_size() {
-    use brdf_atlas_core::field::domain_of;
+    use brdf_atlas_core::albedo_field::domain_of;
     let mut s = 99u64;
     let mut next = || {
         s = s
@@ -296,7 +333,8 @@ fn a_views_domain_holds_it_and_is_at_most_four_times_its_size() {
 #[test]
 fn the_plan_gives_up_only_fields_the_budget_cannot_hold() {
     let tmp = tempfile::tempdir().unwrap();
-    let model = Model::open(fit(tmp.path(), 12, TransformKind::Log)).unwrap();
+    let model =
+        brdf_atlas_core::Atlas::new(Model::open(fit(tmp.path(), 12, TransformKind::Log)).unwrap());
     let latent = model.latent();
     let around = [latent[(3, 0)], latent[(3, 1)]];
     let mut views = vec![View::default()];
@@ -306,7 +344,7 @@ fn the_plan_gives_up_only_fields_the_budget_cannot_hold() {
     }
     let (mut built, mut skipped) = (0, 0);
     for view in views {
-        let domain = brdf_atlas_core::field::domain_of(view);
+        let domain = brdf_atlas_core::albedo_field::domain_of(view);
         for budget in [81, 300, 2000] {
             let plan = model.plan_field(domain, budget).unwrap();
             let exact = model.build_field(domain, budget).unwrap();
@@ -344,20 +382,28 @@ fn a_cancelled_map_stops_caches_nothing_and_the_next_one_is_whole() {
     // and part-way through the rows or the field's refinement.
     let view = zoomed([0.3, 0.2], 100.0);
     for (samples, side) in [(None, 40), (Some(16), 48)] {
-        let reference = Model::open(&path)
-            .unwrap()
-            .albedo_map(side, side, view, samples, &NoProgress)
+        let reference = brdf_atlas_core::Atlas::new(Model::open(&path).unwrap())
+            .map(
+                brdf_atlas_core::MapRequest::new(side, side)
+                    .view(view)
+                    .samples(samples),
+            )
             .unwrap();
         if samples.is_none() {
             assert!(matches!(reference.method, AlbedoMethod::Field { .. }));
         }
         for after in [0, 1, 5] {
-            let model = Model::open(&path).unwrap();
+            let model = brdf_atlas_core::Atlas::new(Model::open(&path).unwrap());
             let cancel = CancelAfter {
                 asked: AtomicUsize::new(0),
                 after,
             };
-            let got = model.albedo_map(side, side, view, samples, &cancel);
+            let got = model.map(
+                brdf_atlas_core::MapRequest::new(side, side)
+                    .view(view)
+                    .samples(samples)
+                    .progress(&cancel),
+            );
             assert!(
                 matches!(got, Err(CoreError::Cancelled)),
                 "{samples:?} after {after}: {:?}",
@@ -365,7 +411,11 @@ fn a_cancelled_map_stops_caches_nothing_and_the_next_one_is_whole() {
             );
             // Nothing half-built was kept: the next map is the whole one.
             let next = model
-                .albedo_map(side, side, view, samples, &NoProgress)
+                .map(
+                    brdf_atlas_core::MapRequest::new(side, side)
+                        .view(view)
+                        .samples(samples),
+                )
                 .unwrap();
             assert_eq!(next.rgb, reference.rgb, "{samples:?} after {after}");
             assert_eq!(next.variance, reference.variance);

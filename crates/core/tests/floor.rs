@@ -5,8 +5,8 @@
 mod common;
 
 use brdf_atlas_core::TransformKind;
-use brdf_atlas_core::floor::{FLOOR_SHARE, FLOOR_SOFTNESS};
 use brdf_atlas_core::loo::{self, CONVEX_LENGTH_RATIO};
+use brdf_atlas_core::soft_floor::{FLOOR_SHARE, FLOOR_SOFTNESS};
 use brdf_atlas_core::{BlendRule, Model, NoProgress};
 use brdf_merl::directional::INCIDENCE_DEGREES;
 use brdf_merl::{DirectionalRule, MerlTable};
@@ -56,7 +56,7 @@ fn inverse(kind: TransformKind, bin: usize, v: f64) -> f64 {
 }
 
 /// The cap's reach per channel at convex weights `v`, recomputed from the
-/// stored rows as `query::floor::reach_cap` and the store's energy bound
+/// stored rows as `soft_floor::reach_cap` and the store's energy bound
 /// define it: the largest `r` in [0, 1] for which `(1 - r) sum_i v_i A_i +
 /// r A_top` stays under `max(1, max_i A_i)` (less 1e-9 of it) at every
 /// incidence, `A_i` each material's directional albedo and `A_top` that of
@@ -99,14 +99,14 @@ fn dense_reach(m: &Model, transform: TransformKind, v: &[f64]) -> [f64; 3] {
 fn values_equal_a_dense_recomputation_and_are_never_clamped() {
     let tmp = tempfile::tempdir().unwrap();
     for transform in TransformKind::ALL {
-        let m = Model::open(fit(tmp.path(), 12, transform)).unwrap();
+        let m = brdf_atlas_core::Atlas::new(Model::open(fit(tmp.path(), 12, transform)).unwrap());
         let store = m.store();
         let (n, bins) = (store.n(), DIMS.bins());
         let mut z = vec![0.0; n];
         let (mut gp_clamped, mut lifted, mut kept, mut capped, mut reached) = (0, 0, 0, 0, 0);
         for x in POINTS {
-            let gp = m.at(&x).unwrap();
-            let b = m.at_with(&x, BlendRule::Floor).unwrap();
+            let gp = m.at(&x, brdf_atlas_core::BlendRule::Gp).unwrap();
+            let b = m.at(&x, BlendRule::Floor).unwrap();
             let v = convex(&m, &x);
             let got_v = b
                 .floor()
@@ -208,7 +208,8 @@ fn values_equal_a_dense_recomputation_and_are_never_clamped() {
 #[test]
 fn held_out_errors_equal_a_dense_recomputation() {
     let tmp = tempfile::tempdir().unwrap();
-    let m = Model::open(fit(tmp.path(), 10, TransformKind::Log)).unwrap();
+    let m =
+        brdf_atlas_core::Atlas::new(Model::open(fit(tmp.path(), 10, TransformKind::Log)).unwrap());
     let (kernel, latent) = (m.file().kernel, m.latent().as_ref());
     let gp = loo::gp_predictor(&kernel, latent, true).unwrap();
     let cv = loo::convex_predictor(&kernel, latent).unwrap();
@@ -278,15 +279,25 @@ fn dense_albedo(m: &Model, b: &brdf_atlas_core::Blend<'_>) -> [f64; 3] {
 fn exact_albedos_and_maps_of_the_floor_are_the_floor_materials() {
     let tmp = tempfile::tempdir().unwrap();
     for transform in [TransformKind::Raw, TransformKind::Log] {
-        let m = Model::open(fit(tmp.path(), 12, transform)).unwrap();
+        let m = brdf_atlas_core::Atlas::new(Model::open(fit(tmp.path(), 12, transform)).unwrap());
         // The exact pass: every point's albedo is the dense rule over the
         // floor material's table.
         let points: Vec<[f64; 2]> = POINTS.to_vec();
-        let got = m.exact_albedos_with(&points, BlendRule::Floor).unwrap();
-        let gp = m.exact_albedos_with(&points, BlendRule::Gp).unwrap();
+        let got = m
+            .exact_albedos(
+                &points,
+                brdf_atlas_core::AlbedoRequest::new().rule(BlendRule::Floor),
+            )
+            .unwrap();
+        let gp = m
+            .exact_albedos(
+                &points,
+                brdf_atlas_core::AlbedoRequest::new().rule(BlendRule::Gp),
+            )
+            .unwrap();
         let mut differs = false;
         for ((x, g), p) in points.iter().zip(&got).zip(&gp) {
-            let want = dense_albedo(&m, &m.at_with(x, BlendRule::Floor).unwrap());
+            let want = dense_albedo(&m, &m.at(x, BlendRule::Floor).unwrap());
             for c in 0..3 {
                 assert!(
                     (g[c] - want[c]).abs() <= 1e-9 * want[c].abs().max(1e-9),
@@ -315,7 +326,12 @@ fn exact_albedos_and_maps_of_the_floor_are_the_floor_materials() {
             (brdf_atlas_core::View::default(), Some(200_000)),
         ] {
             let map = m
-                .albedo_map_with(w, h, view, samples, BlendRule::Floor, &NoProgress)
+                .map(
+                    brdf_atlas_core::MapRequest::new(w, h)
+                        .view(view)
+                        .samples(samples)
+                        .rule(BlendRule::Floor),
+                )
                 .unwrap();
             assert_ne!(map.method, brdf_atlas_core::AlbedoMethod::Linear);
             assert_eq!(map.blend, BlendRule::Floor);
@@ -328,7 +344,7 @@ fn exact_albedos_and_maps_of_the_floor_are_the_floor_materials() {
             }
             for &(px, py) in &[(2usize, 2usize), (9, 6), (14, 10)] {
                 let x = view.pixel_to_latent(px as f64, py as f64, w, h);
-                let want = dense_albedo(&m, &m.at_with(&x, BlendRule::Floor).unwrap());
+                let want = dense_albedo(&m, &m.at(&x, BlendRule::Floor).unwrap());
                 let scale = want.iter().fold(1e-3f64, |a, v| a.max(v.abs()));
                 for (c, (&got, want)) in map.rgb[py * w + px].iter().zip(want).enumerate() {
                     let err = (got as f64 - want).abs() / scale;
@@ -342,15 +358,8 @@ fn exact_albedos_and_maps_of_the_floor_are_the_floor_materials() {
         // The plausible rule's steps are not a function of the point's
         // weights: it has no map.
         assert!(
-            m.albedo_map_with(
-                4,
-                4,
-                brdf_atlas_core::View::default(),
-                None,
-                BlendRule::Plausible,
-                &NoProgress
-            )
-            .is_err()
+            m.map(brdf_atlas_core::MapRequest::new(4, 4).rule(BlendRule::Plausible))
+                .is_err()
         );
     }
 }
@@ -361,7 +370,7 @@ fn the_default_material_reflects_no_more_than_one_nor_than_the_brightest() {
     let rule = DirectionalRule::new(DIMS);
     let albedos = |t: &MerlTable| rule.integrate(|b| t.rgb_or_zero(b));
     for transform in TransformKind::ALL {
-        let m = Model::open(fit(tmp.path(), 12, transform)).unwrap();
+        let m = brdf_atlas_core::Atlas::new(Model::open(fit(tmp.path(), 12, transform)).unwrap());
         // The bound from the material files themselves: at each incidence
         // and channel, 1 or the brightest material's albedo if it is more.
         let mut files: Vec<_> = std::fs::read_dir(tmp.path().join("data-12"))
@@ -399,10 +408,14 @@ fn the_default_material_reflects_no_more_than_one_nor_than_the_brightest() {
         points.extend((0..lat.nrows()).map(|i| [lat[(i, 0)], lat[(i, 1)]]));
         let mut gp_over = 0;
         for x in &points {
-            let table = m.at_with(x, BlendRule::Floor).unwrap().table().unwrap();
+            let table = m.at(x, BlendRule::Floor).unwrap().table().unwrap();
             let a = albedos(&table);
             assert!(!over(&a), "{transform:?} {x:?}: {a:?} over {bound:?}");
-            let gp = m.at(x).unwrap().table().unwrap();
+            let gp = m
+                .at(x, brdf_atlas_core::BlendRule::Gp)
+                .unwrap()
+                .table()
+                .unwrap();
             gp_over += usize::from(over(&albedos(&gp)));
         }
         // The GP's own blend goes over at some of these points: the
@@ -429,11 +442,14 @@ fn the_recorded_bound_is_the_one_the_store_gives() {
         brdf_atlas_core::store_path_for(&older),
     )
     .unwrap();
-    let (recorded, computed) = (Model::open(&path).unwrap(), Model::open(&older).unwrap());
+    let (recorded, computed) = (
+        brdf_atlas_core::Atlas::new(Model::open(&path).unwrap()),
+        brdf_atlas_core::Atlas::new(Model::open(&older).unwrap()),
+    );
     let mut reached = false;
     for x in POINTS {
-        let a = recorded.at_with(&x, BlendRule::Floor).unwrap().reach();
-        let b = computed.at_with(&x, BlendRule::Floor).unwrap().reach();
+        let a = recorded.at(&x, BlendRule::Floor).unwrap().reach();
+        let b = computed.at(&x, BlendRule::Floor).unwrap().reach();
         assert_eq!(a, b, "{x:?}");
         reached |= a.iter().any(|&r| r < 1.0);
     }

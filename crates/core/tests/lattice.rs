@@ -1,4 +1,4 @@
-//! The prepared map (`Model::prepare_map`, the adaptive lattice of exact
+//! The prepared map (`Atlas::prepare_map`, the adaptive lattice of exact
 //! albedos over the default view) against an independent reference: its
 //! albedo at random points of the default view and of a view a hundred
 //! times smaller against the dense rule applied to the full reconstruction
@@ -11,7 +11,7 @@ mod common;
 
 use std::path::Path;
 
-use brdf_atlas_core::measure::reference_albedo;
+use brdf_atlas_core::map_error::reference_albedo;
 use brdf_atlas_core::{
     AlbedoLattice, AlbedoMethod, BlendRule, LATTICE_TOLERANCE, Model, NoProgress, TransformKind,
     View, lattice_path,
@@ -57,9 +57,9 @@ fn worst_error(
     worst
 }
 
-fn prepared(dir: &Path, count: usize, rule: BlendRule) -> (Model, AlbedoLattice) {
+fn prepared(dir: &Path, count: usize, rule: BlendRule) -> (brdf_atlas_core::Atlas, AlbedoLattice) {
     let path = common::fit(dir, count, TransformKind::Log);
-    let model = Model::open(&path).unwrap();
+    let model = brdf_atlas_core::Atlas::new(Model::open(&path).unwrap());
     let lattice = model
         .prepare_map(rule, LATTICE_TOLERANCE, &NoProgress)
         .unwrap();
@@ -94,7 +94,7 @@ fn a_saved_lattice_draws_every_map_inside_the_default_view() {
     let path = lattice_path(model.path());
     lattice.save(&path).unwrap();
     // A fresh model reads it on its first map.
-    let model = Model::open(model.path()).unwrap();
+    let model = brdf_atlas_core::Atlas::new(Model::open(model.path()).unwrap());
     let loaded = model
         .prepared_map()
         .unwrap()
@@ -105,7 +105,9 @@ fn a_saved_lattice_draws_every_map_inside_the_default_view() {
     }
     for view in [View::default(), View::zoomed_hundredfold()] {
         let (w, h) = (48, 40);
-        let map = model.albedo_map(w, h, view, None, &NoProgress).unwrap();
+        let map = model
+            .map(brdf_atlas_core::MapRequest::new(w, h).view(view))
+            .unwrap();
         assert!(
             matches!(map.method, AlbedoMethod::Lattice { nodes, .. } if nodes == lattice.nodes()),
             "{:?}",
@@ -139,7 +141,7 @@ fn a_saved_lattice_draws_every_map_inside_the_default_view() {
     }
     // Not for another rule, a view beyond the default one, or a sample count.
     let gp = model
-        .albedo_map_with(16, 16, View::default(), None, BlendRule::Gp, &NoProgress)
+        .map(brdf_atlas_core::MapRequest::new(16, 16).rule(BlendRule::Gp))
         .unwrap();
     assert!(
         !matches!(gp.method, AlbedoMethod::Lattice { .. }),
@@ -152,7 +154,9 @@ fn a_saved_lattice_draws_every_map_inside_the_default_view() {
         y0: -0.2,
         y1: 0.2,
     };
-    let beyond = model.albedo_map(16, 16, far, None, &NoProgress).unwrap();
+    let beyond = model
+        .map(brdf_atlas_core::MapRequest::new(16, 16).view(far))
+        .unwrap();
     assert!(
         !matches!(beyond.method, AlbedoMethod::Lattice { .. }),
         "{:?}",
@@ -168,7 +172,9 @@ fn a_saved_lattice_draws_every_map_inside_the_default_view() {
         y1: 1.0,
     };
     let (w, h) = (30, 22);
-    let mixed = model.albedo_map(w, h, wide, None, &NoProgress).unwrap();
+    let mixed = model
+        .map(brdf_atlas_core::MapRequest::new(w, h).view(wide))
+        .unwrap();
     let AlbedoMethod::Lattice { share, .. } = mixed.method else {
         panic!("{:?}", mixed.method)
     };
@@ -200,7 +206,7 @@ fn a_saved_lattice_draws_every_map_inside_the_default_view() {
     assert!(inside > 0 && inside < w * h, "{inside} pixels inside");
     assert_eq!(share, inside as f64 / (w * h) as f64);
     let sampled = model
-        .albedo_map(16, 16, View::default(), Some(64), &NoProgress)
+        .map(brdf_atlas_core::MapRequest::new(16, 16).samples(Some(64)))
         .unwrap();
     assert!(
         matches!(sampled.method, AlbedoMethod::Quadrature { .. }),
@@ -212,7 +218,9 @@ fn a_saved_lattice_draws_every_map_inside_the_default_view() {
 #[test]
 fn bad_requests_are_refused_in_one_line() {
     let dir = tempfile::tempdir().unwrap();
-    let model = Model::open(common::fit(dir.path(), 4, TransformKind::Log)).unwrap();
+    let model = brdf_atlas_core::Atlas::new(
+        Model::open(common::fit(dir.path(), 4, TransformKind::Log)).unwrap(),
+    );
     for (rule, tolerance, want) in [
         (BlendRule::Plausible, LATTICE_TOLERANCE, "plausible"),
         (BlendRule::Floor, 0.0, "tolerance"),
@@ -237,7 +245,7 @@ fn a_lattice_of_another_fit_or_a_damaged_one_is_named_and_left_aside() {
     let original = std::fs::read(model.path()).unwrap();
     let other = common::fit(dir.path(), 7, TransformKind::Log);
     std::fs::copy(&other, model.path()).unwrap();
-    let refit = Model::open(model.path()).unwrap();
+    let refit = brdf_atlas_core::Atlas::new(Model::open(model.path()).unwrap());
     let why = refit
         .prepared_map()
         .err()
@@ -248,14 +256,12 @@ fn a_lattice_of_another_fit_or_a_damaged_one_is_named_and_left_aside() {
         "{why}"
     );
     assert!(!why.contains('\n'), "{why}");
-    let handed = refit.albedo_map_prepared(&lattice, 8, 8, View::default(), &NoProgress);
+    let handed = refit.map(brdf_atlas_core::MapRequest::new(8, 8).lattice(&lattice));
     let why = handed
         .expect_err("a lattice of another fit, handed over")
         .to_string();
     assert!(why.contains("another fit"), "{why}");
-    let map = refit
-        .albedo_map(16, 16, View::default(), None, &NoProgress)
-        .unwrap();
+    let map = refit.map(brdf_atlas_core::MapRequest::new(16, 16)).unwrap();
     assert!(
         !matches!(map.method, AlbedoMethod::Lattice { .. }),
         "{:?}",
@@ -267,7 +273,7 @@ fn a_lattice_of_another_fit_or_a_damaged_one_is_named_and_left_aside() {
     let text = std::fs::read(&path).unwrap();
     for damaged in [&text[..text.len() / 2], b"hello".as_slice()] {
         std::fs::write(&path, damaged).unwrap();
-        let model = Model::open(model.path()).unwrap();
+        let model = brdf_atlas_core::Atlas::new(Model::open(model.path()).unwrap());
         let why = model
             .prepared_map()
             .err()

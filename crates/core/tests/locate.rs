@@ -25,13 +25,13 @@ fn a_material_beyond_the_box_lands_beyond_it() {
     for target in [[1.6, 0.3], [-0.4, -1.45]] {
         let merl = dir.path().join("beyond.binary");
         model
-            .at(&target)
+            .at(&target, brdf_atlas_core::BlendRule::Gp)
             .unwrap()
             .table()
             .unwrap()
             .write(&merl)
             .unwrap();
-        let l = model.locate(&MerlFile::open(&merl).unwrap()).unwrap();
+        let l = brdf_atlas_core::Located::find(&model, &MerlFile::open(&merl).unwrap()).unwrap();
         let d = ((l.point[0] - target[0]).powi(2) + (l.point[1] - target[1]).powi(2)).sqrt();
         assert!(d < 0.02, "{target:?} located at {:?}", l.point);
         assert!(
@@ -53,7 +53,7 @@ fn a_material_beyond_the_box_lands_beyond_it() {
         .map(|e| e.unwrap().path())
         .min()
         .unwrap();
-    let l = model.locate(&MerlFile::open(&first).unwrap()).unwrap();
+    let l = brdf_atlas_core::Located::find(&model, &MerlFile::open(&first).unwrap()).unwrap();
     let name = first.file_stem().unwrap().to_str().unwrap();
     assert_eq!(model.names()[l.nearest[0].0], name);
     assert!(l.in_default_view());

@@ -75,10 +75,10 @@ fn dense_clamp_kept<'a>(
 fn clamp_figures_equal_a_dense_recomputation() {
     let tmp = tempfile::tempdir().unwrap();
     for transform in [TransformKind::Raw, TransformKind::Log] {
-        let m = Model::open(fit(tmp.path(), 12, transform)).unwrap();
+        let m = brdf_atlas_core::Atlas::new(Model::open(fit(tmp.path(), 12, transform)).unwrap());
         let mut clamped_somewhere = false;
         for x in POINTS {
-            let b = m.at(&x).unwrap();
+            let b = m.at(&x, brdf_atlas_core::BlendRule::Gp).unwrap();
             let p = b.plausibility().unwrap();
             let d = dense_clamp(&m, b.weights());
             let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1e-12);
@@ -99,7 +99,7 @@ fn clamp_figures_equal_a_dense_recomputation() {
             // The table and its figures from one pass: the same bits, for
             // the GP's blend and the soft floor.
             for rule in [BlendRule::Gp, BlendRule::Floor] {
-                let b = m.at_with(&x, rule).unwrap();
+                let b = m.at(&x, rule).unwrap();
                 let (t, q) = b.table_and_plausibility().unwrap();
                 assert_eq!(t, b.table().unwrap(), "{transform:?} {x:?} {rule:?}");
                 let p = b.plausibility().unwrap();
@@ -116,15 +116,22 @@ fn clamp_figures_equal_a_dense_recomputation() {
 #[test]
 fn confidence_is_the_predictive_variance() {
     let tmp = tempfile::tempdir().unwrap();
-    let m = Model::open(fit(tmp.path(), 12, TransformKind::Log)).unwrap();
+    let m =
+        brdf_atlas_core::Atlas::new(Model::open(fit(tmp.path(), 12, TransformKind::Log)).unwrap());
     let kernel = m.file().kernel;
     let latent = m.latent();
     // At an input material: the noise is all that is left.
     let xi: Vec<f64> = (0..2).map(|c| latent[(3, c)]).collect();
-    let c = m.at(&xi).unwrap().confidence();
+    let c = m
+        .at(&xi, brdf_atlas_core::BlendRule::Gp)
+        .unwrap()
+        .confidence();
     assert!(c.variance < 1e-3 && !c.is_low(), "{c:?}");
     // Far away: nothing known, the weights vanish.
-    let c = m.at(&[40.0, -40.0]).unwrap().confidence();
+    let c = m
+        .at(&[40.0, -40.0], brdf_atlas_core::BlendRule::Gp)
+        .unwrap()
+        .confidence();
     assert!(
         c.variance > 0.999 && c.is_low() && c.weight_sum.abs() < 1e-6,
         "{c:?}"
@@ -137,7 +144,10 @@ fn confidence_is_the_predictive_variance() {
     let quad: f64 = (0..n)
         .map(|i| (0..n).map(|j| k[i] * inv[(i, j)] * k[j]).sum::<f64>())
         .sum();
-    let c = m.at(&x).unwrap().confidence();
+    let c = m
+        .at(&x, brdf_atlas_core::BlendRule::Gp)
+        .unwrap()
+        .confidence();
     assert!(
         (c.variance - (1.0 - quad).clamp(0.0, 1.0)).abs() < 1e-9,
         "{c:?} vs {quad}"
@@ -148,11 +158,11 @@ fn confidence_is_the_predictive_variance() {
 fn the_plausible_rule_keeps_every_theta_h_bin_within_budget_and_the_gp_where_it_already_is() {
     let tmp = tempfile::tempdir().unwrap();
     for transform in [TransformKind::Raw, TransformKind::Log] {
-        let m = Model::open(fit(tmp.path(), 12, transform)).unwrap();
+        let m = brdf_atlas_core::Atlas::new(Model::open(fit(tmp.path(), 12, transform)).unwrap());
         let mut moved = 0;
         for x in POINTS {
-            let gp = m.at_with(&x, BlendRule::Gp).unwrap();
-            let pl = m.at_with(&x, BlendRule::Plausible).unwrap();
+            let gp = m.at(&x, BlendRule::Gp).unwrap();
+            let pl = m.at(&x, BlendRule::Plausible).unwrap();
             assert_eq!(gp.weights(), pl.weights(), "the GP's weights are the base");
             let share_in = |b: usize, w: &[f64]| {
                 let d = dense_clamp_by(&m, |_| w, Some(b));
@@ -239,12 +249,13 @@ fn table_albedo(b: &brdf_atlas_core::Blend<'_>) -> f64 {
 #[test]
 fn the_plausible_rule_brings_the_largest_albedo_to_one() {
     let tmp = tempfile::tempdir().unwrap();
-    let m = Model::open(fit(tmp.path(), 12, TransformKind::Log)).unwrap();
+    let m =
+        brdf_atlas_core::Atlas::new(Model::open(fit(tmp.path(), 12, TransformKind::Log)).unwrap());
     let mut raised = 0;
     for k in 0..49 {
         let x = [-2.4 + 0.8 * (k % 7) as f64, -2.4 + 0.8 * (k / 7) as f64];
-        let gp = m.at_with(&x, BlendRule::Gp).unwrap();
-        let pl = m.at_with(&x, BlendRule::Plausible).unwrap();
+        let gp = m.at(&x, BlendRule::Gp).unwrap();
+        let pl = m.at(&x, BlendRule::Plausible).unwrap();
         let (a_gp, a_pl) = (table_albedo(&gp), table_albedo(&pl));
         // The ceiling: 1, or the convex blend's albedo where the materials
         // themselves exceed 1. The convex weights of the narrower kernel
@@ -373,7 +384,7 @@ fn hard_cases_stay_finite() {
             precision: Precision::F64,
         };
         fit_dir(dir, &model, &options, &NoProgress).unwrap();
-        let m = Model::open(&model).unwrap();
+        let m = brdf_atlas_core::Atlas::new(Model::open(&model).unwrap());
         // Every material comes back at its own point, the twins and the
         // mirror among them, and the latent points stay in the box.
         let own = &m.file().fidelity.as_ref().unwrap().own;
@@ -388,11 +399,14 @@ fn hard_cases_stay_finite() {
                 .all(|c| c.iter().all(|v| v.abs() <= 1.0 + 1e-12))
         );
         // Far from every material the model knows nothing, and says so.
-        let far = m.at(&[30.0, 30.0][..q]).unwrap().confidence();
+        let far = m
+            .at(&[30.0, 30.0][..q], brdf_atlas_core::BlendRule::Gp)
+            .unwrap()
+            .confidence();
         assert!(far.is_low() && far.variance > 0.99, "{name}: {far:?}");
         for x in [[0.0, 0.0], [0.9, -0.9], [30.0, 30.0]] {
             for rule in [BlendRule::Gp, BlendRule::Plausible, BlendRule::Floor] {
-                let b = m.at_with(&x[..q], rule).unwrap();
+                let b = m.at(&x[..q], rule).unwrap();
                 let table = b.table().unwrap();
                 assert!(
                     table.raw().iter().all(|v| v.is_finite()),
@@ -421,7 +435,7 @@ fn hard_cases_stay_finite() {
 fn many_points_in_one_pass_take_the_steps_each_takes_alone() {
     let tmp = tempfile::tempdir().unwrap();
     for transform in [TransformKind::Raw, TransformKind::Log] {
-        let m = Model::open(fit(tmp.path(), 12, transform)).unwrap();
+        let m = brdf_atlas_core::Atlas::new(Model::open(fit(tmp.path(), 12, transform)).unwrap());
         // Enough points for the pass's matrix product (8 weight vectors and
         // more), the test points among them.
         let mut points: Vec<Vec<f64>> = POINTS.iter().map(|p| p.to_vec()).collect();
@@ -436,7 +450,7 @@ fn many_points_in_one_pass_take_the_steps_each_takes_alone() {
         assert_eq!(together.len(), points.len());
         let mut moved = 0;
         for (x, b) in points.iter().zip(&together) {
-            let alone = m.at_with(x, BlendRule::Plausible).unwrap();
+            let alone = m.at(x, BlendRule::Plausible).unwrap();
             assert_eq!(b.point(), x.as_slice());
             let (got, want) = (b.steps(), alone.steps());
             assert_eq!(
@@ -457,7 +471,7 @@ fn many_points_in_one_pass_take_the_steps_each_takes_alone() {
 fn many_points_in_one_pass_have_the_figures_each_has_alone() {
     let tmp = tempfile::tempdir().unwrap();
     for transform in [TransformKind::Raw, TransformKind::Log] {
-        let m = Model::open(fit(tmp.path(), 12, transform)).unwrap();
+        let m = brdf_atlas_core::Atlas::new(Model::open(fit(tmp.path(), 12, transform)).unwrap());
         // More points than a product's tile, the test points and one far
         // from every material among them.
         let mut points: Vec<[f64; 2]> = POINTS.iter().map(|p| [p[0], p[1]]).collect();
@@ -471,7 +485,7 @@ fn many_points_in_one_pass_have_the_figures_each_has_alone() {
             let together = m.plausibilities(&points, rule, Every::BIN).unwrap();
             assert_eq!(together.len(), points.len());
             for (x, got) in points.iter().zip(&together) {
-                let want = m.at_with(x, rule).unwrap().plausibility().unwrap();
+                let want = m.at(x, rule).unwrap().plausibility().unwrap();
                 let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs() + 1e-12;
                 assert!(
                     close(got.clamped_reflectance, want.clamped_reflectance)
@@ -516,7 +530,8 @@ fn many_points_in_one_pass_have_the_figures_each_has_alone() {
             )
         );
     }
-    let m = Model::open(fit(tmp.path(), 12, TransformKind::Log)).unwrap();
+    let m =
+        brdf_atlas_core::Atlas::new(Model::open(fit(tmp.path(), 12, TransformKind::Log)).unwrap());
     assert!(
         m.plausibilities(&[], BlendRule::Floor, Every::BIN)
             .unwrap()
@@ -535,7 +550,8 @@ fn many_points_in_one_pass_have_the_figures_each_has_alone() {
 #[test]
 fn many_points_on_a_subsample_of_the_bins_equal_a_recomputation_over_them() {
     let tmp = tempfile::tempdir().unwrap();
-    let m = Model::open(fit(tmp.path(), 12, TransformKind::Log)).unwrap();
+    let m =
+        brdf_atlas_core::Atlas::new(Model::open(fit(tmp.path(), 12, TransformKind::Log)).unwrap());
     let points: Vec<[f64; 2]> = POINTS.iter().map(|p| [p[0], p[1]]).collect();
     let every = Every {
         theta_d: 2,
@@ -547,7 +563,7 @@ fn many_points_on_a_subsample_of_the_bins_equal_a_recomputation_over_them() {
         let sub = m.plausibilities(&points, rule, every).unwrap();
         let all = m.plausibilities(&points, rule, Every::BIN).unwrap();
         for ((x, got), whole) in points.iter().zip(&sub).zip(&all) {
-            let b = m.at_with(x, rule).unwrap();
+            let b = m.at(x, rule).unwrap();
             let d = dense_clamp_kept(&m, |band| b.weights_in(band), None, every);
             assert!(
                 close(got.clamped_reflectance, d[0] / d[1])
@@ -569,7 +585,7 @@ fn largest_albedos_of_many_points_are_each_points_alone_whatever_the_thread_coun
     let tmp = tempfile::tempdir().unwrap();
     for transform in [TransformKind::Raw, TransformKind::Log] {
         let path = fit(tmp.path(), 12, transform);
-        let m = Model::open(&path).unwrap();
+        let m = brdf_atlas_core::Atlas::new(Model::open(&path).unwrap());
         let mut points: Vec<[f64; 2]> = POINTS.iter().map(|p| [p[0], p[1]]).collect();
         points.push([4.0, -3.5]);
         points.extend((0..9).map(|k| {
@@ -588,7 +604,7 @@ fn largest_albedos_of_many_points_are_each_points_alone_whatever_the_thread_coun
             assert_eq!(together, in_pool(1), "{transform:?} {rule:?}");
             assert_eq!(together.len(), points.len());
             for (x, &(got, incidence)) in points.iter().zip(&together) {
-                let (want, want_incidence) = m.at_with(x, rule).unwrap().largest_albedo();
+                let (want, want_incidence) = m.at(x, rule).unwrap().largest_albedo();
                 assert!(
                     (got - want).abs() <= 1e-12 * want.abs() && want > 0.0,
                     "{transform:?} {rule:?} {x:?}: {got} against {want}"

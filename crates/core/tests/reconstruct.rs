@@ -53,10 +53,16 @@ fn z(m: &Model, row: usize, i: usize) -> f64 {
 fn full_table_equals_the_dense_weighted_sum() {
     let tmp = tempfile::tempdir().unwrap();
     for transform in [TransformKind::Raw, TransformKind::Log] {
-        let m = Model::open(fit(tmp.path(), transform, Precision::F64)).unwrap();
+        let m = brdf_atlas_core::Atlas::new(
+            Model::open(fit(tmp.path(), transform, Precision::F64)).unwrap(),
+        );
         let x = [0.31, -0.42];
         let w = dense_weights(&m, &x);
-        let table = m.at(&x).unwrap().table().unwrap();
+        let table = m
+            .at(&x, brdf_atlas_core::BlendRule::Gp)
+            .unwrap()
+            .table()
+            .unwrap();
         let t = transform.build(DIMS);
         let bins = DIMS.bins();
         for row in 0..DIMS.values() {
@@ -88,10 +94,12 @@ fn full_table_equals_the_dense_weighted_sum() {
 #[test]
 fn training_points_reproduce_their_material() {
     let tmp = tempfile::tempdir().unwrap();
-    let m = Model::open(fit(tmp.path(), TransformKind::Log, Precision::F64)).unwrap();
+    let m = brdf_atlas_core::Atlas::new(
+        Model::open(fit(tmp.path(), TransformKind::Log, Precision::F64)).unwrap(),
+    );
     for i in 0..8 {
         let x: Vec<f64> = (0..2).map(|c| m.latent()[(i, c)]).collect();
-        let b = m.at(&x).unwrap();
+        let b = m.at(&x, brdf_atlas_core::BlendRule::Gp).unwrap();
         // In transformed space the residual is mu (K^-1 Z)_i: tiny next to the data.
         let (mut err, mut norm) = (0.0, 0.0);
         for row in 0..DIMS.values() {
@@ -112,8 +120,10 @@ fn training_points_reproduce_their_material() {
 fn point_queries_equal_the_full_table() {
     let tmp = tempfile::tempdir().unwrap();
     for precision in [Precision::F32, Precision::F64] {
-        let m = Model::open(fit(tmp.path(), TransformKind::Log, precision)).unwrap();
-        let b = m.at(&[-0.2, 0.7]).unwrap();
+        let m = brdf_atlas_core::Atlas::new(
+            Model::open(fit(tmp.path(), TransformKind::Log, precision)).unwrap(),
+        );
+        let b = m.at(&[-0.2, 0.7], brdf_atlas_core::BlendRule::Gp).unwrap();
         let table = b.table().unwrap();
         for bin in (0..DIMS.bins()).step_by(7) {
             let from_table = table
@@ -152,11 +162,16 @@ fn point_queries_equal_the_full_table() {
 #[test]
 fn remembered_point_queries_match_fresh_and_dense_ones() {
     let tmp = tempfile::tempdir().unwrap();
-    let m = Model::open(fit(tmp.path(), TransformKind::Raw, Precision::F64)).unwrap();
+    let m = brdf_atlas_core::Atlas::new(
+        Model::open(fit(tmp.path(), TransformKind::Raw, Precision::F64)).unwrap(),
+    );
     let x = [0.4, -0.3];
     let w = dense_weights(&m, &x);
     let bins = DIMS.bins();
-    let (forward, backward) = (m.at(&x).unwrap(), m.at(&x).unwrap());
+    let (forward, backward) = (
+        m.at(&x, brdf_atlas_core::BlendRule::Gp).unwrap(),
+        m.at(&x, brdf_atlas_core::BlendRule::Gp).unwrap(),
+    );
     let cold: Vec<_> = (0..bins).map(|bin| forward.rgb(bin)).collect();
     for _ in 0..2 {
         for bin in (0..bins).rev() {
@@ -197,7 +212,10 @@ fn remembered_point_queries_match_fresh_and_dense_ones() {
             )
         })
         .collect();
-    let batch = m.at(&x).unwrap().eval_batch(&pairs);
+    let batch = m
+        .at(&x, brdf_atlas_core::BlendRule::Gp)
+        .unwrap()
+        .eval_batch(&pairs);
     for (p, got) in pairs.iter().zip(&batch) {
         assert_eq!(*got, forward.eval(p.0, p.1));
     }
@@ -206,9 +224,11 @@ fn remembered_point_queries_match_fresh_and_dense_ones() {
 #[test]
 fn written_reconstruction_reads_back_with_the_merl_reader() {
     let tmp = tempfile::tempdir().unwrap();
-    let m = Model::open(fit(tmp.path(), TransformKind::Raw, Precision::F32)).unwrap();
+    let m = brdf_atlas_core::Atlas::new(
+        Model::open(fit(tmp.path(), TransformKind::Raw, Precision::F32)).unwrap(),
+    );
     let out = tmp.path().join("new.binary");
-    m.at(&[0.9, 0.9])
+    m.at(&[0.9, 0.9], brdf_atlas_core::BlendRule::Gp)
         .unwrap()
         .table()
         .unwrap()
@@ -228,17 +248,26 @@ fn written_reconstruction_reads_back_with_the_merl_reader() {
 #[test]
 fn linear_map_equals_quadrature_of_the_reconstruction() {
     let tmp = tempfile::tempdir().unwrap();
-    let m = Model::open(fit(tmp.path(), TransformKind::Raw, Precision::F64)).unwrap();
+    let m = brdf_atlas_core::Atlas::new(
+        Model::open(fit(tmp.path(), TransformKind::Raw, Precision::F64)).unwrap(),
+    );
     let view = brdf_atlas_core::View::default();
     let (w, h) = (16, 12);
     // The GP's material: the soft floor (the default) is not linear.
-    let gp = |samples| m.albedo_map_with(w, h, view, samples, BlendRule::Gp, &NoProgress);
+    let gp = |samples| {
+        m.map(
+            brdf_atlas_core::MapRequest::new(w, h)
+                .view(view)
+                .samples(samples)
+                .rule(BlendRule::Gp),
+        )
+    };
     let map = gp(None).unwrap();
     let rule = Quadrature::dense(DIMS, 2);
     let bins = DIMS.bins();
     for &(px, py) in &[(0usize, 0usize), (5, 7), (15, 11), (8, 3)] {
         let x = view.pixel_to_latent(px as f64, py as f64, w, h);
-        let b = m.at(&x).unwrap();
+        let b = m.at(&x, brdf_atlas_core::BlendRule::Gp).unwrap();
         // The blend before clamping, integrated bin by bin.
         let want = rule.integrate(|bin| {
             [0, 1, 2].map(|c| {
@@ -267,7 +296,10 @@ fn linear_map_equals_quadrature_of_the_reconstruction() {
     let (mut err_fine, mut err_coarse) = (0.0f64, 0.0f64);
     for &(px, py) in &[(2usize, 2usize), (9, 6), (14, 10)] {
         let b = m
-            .at(&view.pixel_to_latent(px as f64, py as f64, w, h))
+            .at(
+                &view.pixel_to_latent(px as f64, py as f64, w, h),
+                brdf_atlas_core::BlendRule::Gp,
+            )
             .unwrap();
         let want = rule.integrate(|bin| [0, 1, 2].map(|c| b.value(c, bin).unwrap_or(0.0)));
         let scale = want.iter().fold(1e-3f64, |a, v| a.max(v.abs()));
@@ -281,17 +313,28 @@ fn linear_map_equals_quadrature_of_the_reconstruction() {
     assert!(err_fine < err_coarse, "{err_fine} !< {err_coarse}");
     // The log transform has no linear shortcut: without samples its map is
     // the albedo field (or the per-pixel rule where that is cheaper).
-    let log = Model::open(fit(tmp.path(), TransformKind::Log, Precision::F32)).unwrap();
-    let map = log.albedo_map(4, 4, view, None, &NoProgress).unwrap();
+    let log = brdf_atlas_core::Atlas::new(
+        Model::open(fit(tmp.path(), TransformKind::Log, Precision::F32)).unwrap(),
+    );
+    let map = log
+        .map(brdf_atlas_core::MapRequest::new(4, 4).view(view))
+        .unwrap();
     assert_ne!(map.method, brdf_atlas_core::AlbedoMethod::Linear);
-    assert!(log.albedo_map(4, 4, view, Some(1000), &NoProgress).is_ok());
+    assert!(
+        log.map(
+            brdf_atlas_core::MapRequest::new(4, 4)
+                .view(view)
+                .samples(Some(1000))
+        )
+        .is_ok()
+    );
 }
 
 #[test]
 fn a_near_twin_lands_next_to_its_twin() {
     let tmp = tempfile::tempdir().unwrap();
     let model = fit(tmp.path(), TransformKind::Log, Precision::F32);
-    let m = Model::open(&model).unwrap();
+    let m = brdf_atlas_core::Atlas::new(Model::open(&model).unwrap());
     let mats = database(8, 3);
     for k in [1usize, 2, 5] {
         let src = &mats[k].brdf;
@@ -302,7 +345,7 @@ fn a_near_twin_lands_next_to_its_twin() {
         };
         let path = tmp.path().join(format!("twin{k}.binary"));
         twin.table(DIMS).write(&path).unwrap();
-        let found = m.locate(&MerlFile::open(&path).unwrap()).unwrap();
+        let found = brdf_atlas_core::Located::find(&m, &MerlFile::open(&path).unwrap()).unwrap();
         let name = &m.names()[found.nearest[0].0];
         assert_eq!(
             name, &mats[k].name,
@@ -320,7 +363,7 @@ fn a_near_twin_lands_next_to_its_twin() {
         .write(&odd)
         .unwrap();
     assert!(
-        m.locate(&MerlFile::open(&odd).unwrap())
+        brdf_atlas_core::Located::find(&m, &MerlFile::open(&odd).unwrap())
             .unwrap_err()
             .to_string()
             .contains("odd.binary")

@@ -89,7 +89,7 @@ impl BrdfAtlasAnalytic {
 
 /// The fits of the default rule's material at `p`, as `brdf-atlas export` makes them.
 fn fit(m: &Model, p: [f64; 2]) -> Result<Fits> {
-    let table = m.at_with(&p, BlendRule::default())?.table()?;
+    let table = m.at(&p, BlendRule::default())?.table()?;
     let what = format!("the material at ({}, {})", p[0], p[1]);
     Ok(fit_as_exported(&table, &what, &SWATCH_LIGHTS)?)
 }

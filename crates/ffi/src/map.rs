@@ -210,7 +210,13 @@ unsafe fn albedo_map(
     let values = check::product(&[width, height, 3], "map size")?;
     let out = unsafe { check::buffer(buf, len, values, "buf") }?;
     let samples = map_samples(samples)?;
-    let map = m.albedo_map_with(width, height, view, samples, rule, progress)?;
+    let map = m.map(
+        brdf_atlas_core::MapRequest::new(width, height)
+            .view(view)
+            .samples(samples)
+            .rule(rule)
+            .progress(progress),
+    )?;
     for (o, c) in out.chunks_exact_mut(3).zip(&map.rgb) {
         o.copy_from_slice(c);
     }

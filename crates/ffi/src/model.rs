@@ -2,8 +2,8 @@
 
 use std::ffi::{c_char, c_int};
 
-use brdf_atlas_core::Model;
 use brdf_atlas_core::View;
+use brdf_atlas_core::{Atlas, Model};
 
 use crate::check;
 use crate::status::{BrdfAtlasStatus, Failure, Result, run};
@@ -14,7 +14,8 @@ use crate::status::{BrdfAtlasStatus, Failure, Result, run};
 /// `brdf_atlas_model_free`. Immutable once open: one handle may serve
 /// concurrent calls from any number of threads.
 pub struct BrdfAtlasModel {
-    pub(crate) model: Model,
+    /// The model, with what its maps keep between calls.
+    pub(crate) atlas: Atlas,
 }
 
 // One handle serves many threads: the model must be shareable.
@@ -23,16 +24,16 @@ const _: () = {
     shareable::<BrdfAtlasModel>()
 };
 
-/// The model behind a handle.
+/// The atlas behind a handle (its model through it).
 ///
 /// # Safety
 /// `p` is NULL or a handle from `brdf_atlas_model_open` not yet freed.
-pub(crate) unsafe fn borrow<'a>(p: *const BrdfAtlasModel) -> Result<&'a Model> {
+pub(crate) unsafe fn borrow<'a>(p: *const BrdfAtlasModel) -> Result<&'a Atlas> {
     // SAFETY: the caller promises a live handle.
-    let model = unsafe { check::borrowed(p, "model") }.map(|h| &h.model)?;
+    let atlas = unsafe { check::borrowed(p, "model") }.map(|h| &h.atlas)?;
     // A handle whose store was seen to change refuses every call.
-    model.store().verify_cheap()?;
-    Ok(model)
+    atlas.store().verify_cheap()?;
+    Ok(atlas)
 }
 
 /// A window of the latent plane: x in [x0, x1], y in [y0, y1], y up.
@@ -164,8 +165,8 @@ pub unsafe extern "C" fn brdf_atlas_model_open(
     run("brdf_atlas_model_open", || {
         let path = unsafe { check::path(path, "path") }?;
         let out = unsafe { check::out(out, "out") }?;
-        let model = Model::open(path)?;
-        *out = Box::into_raw(Box::new(BrdfAtlasModel { model }));
+        let atlas = Atlas::new(Model::open(path)?);
+        *out = Box::into_raw(Box::new(BrdfAtlasModel { atlas }));
         Ok(())
     })
 }

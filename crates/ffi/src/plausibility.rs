@@ -85,7 +85,7 @@ pub unsafe extern "C" fn brdf_atlas_model_plausibility(
         let m = unsafe { handle::borrow(model) }?;
         let out = unsafe { check::out(out, "out") }?;
         let p = check::point(m, x, y)?;
-        let b = m.at_with(&p, rule(blend)?)?;
+        let b = m.at(&p, rule(blend)?)?;
         let (pl, c) = (b.plausibility()?, b.confidence());
         *out = BrdfAtlasPlausibility {
             clamped_reflectance: pl.clamped_reflectance,
@@ -128,7 +128,7 @@ pub unsafe extern "C" fn brdf_atlas_model_confidence(
         let variance = unsafe { check::optional_out(variance, "variance") }?;
         let weight_sum = unsafe { check::optional_out(weight_sum, "weight_sum") }?;
         let p = check::point(m, x, y)?;
-        let c = m.at(&p)?.confidence();
+        let c = m.at(&p, brdf_atlas_core::BlendRule::Gp)?.confidence();
         if let Some(v) = variance {
             *v = c.variance;
         }
@@ -219,7 +219,7 @@ pub unsafe extern "C" fn brdf_atlas_model_reconstruct_with(
         let p = check::point(m, x, y)?;
         let out = unsafe { check::buffer(buf, len, m.dims().values(), "buf") }?;
         let written = unsafe { check::optional_out(written, "written") }?;
-        let table = m.at_with(&p, rule(blend)?)?.table()?;
+        let table = m.at(&p, rule(blend)?)?.table()?;
         out.copy_from_slice(table.raw());
         if let Some(w) = written {
             *w = out.len();

@@ -65,7 +65,7 @@ pub unsafe extern "C" fn brdf_atlas_model_reconstruct(
         let p = check::point(m, x, y)?;
         let out = unsafe { check::buffer(buf, len, m.dims().values(), "buf") }?;
         let written = unsafe { check::optional_out(written, "written") }?;
-        let table = m.at_with(&p, BlendRule::default())?.table()?;
+        let table = m.at(&p, BlendRule::default())?.table()?;
         out.copy_from_slice(table.raw());
         if let Some(w) = written {
             *w = out.len();
@@ -99,7 +99,7 @@ pub unsafe extern "C" fn brdf_atlas_model_reconstruct_to_file(
         let m = unsafe { handle::borrow(model) }?;
         let path = unsafe { check::path(path, "path") }?;
         let p = check::point(m, x, y)?;
-        m.at_with(&p, BlendRule::default())?.table()?.write(path)?;
+        m.at(&p, BlendRule::default())?.table()?.write(path)?;
         Ok(())
     })
 }
@@ -145,7 +145,7 @@ pub unsafe extern "C" fn brdf_atlas_model_eval(
         let wo = unsafe { check::input(wo, 3, "wo") }?;
         let out = unsafe { check::buffer(rgb, 3, 3, "rgb") }?;
         let p = check::point(m, x, y)?;
-        let blend = m.at_with(&p, BlendRule::default())?;
+        let blend = m.at(&p, BlendRule::default())?;
         let rgb = eval_one(&blend, wi, wo);
         m.verify()?;
         out.copy_from_slice(&rgb);
@@ -192,7 +192,7 @@ pub unsafe extern "C" fn brdf_atlas_model_eval_batch(
         }
         let out = unsafe { check::buffer(rgb, len, values, "rgb") }?;
         let p = check::point(m, x, y)?;
-        let blend = m.at_with(&p, BlendRule::default())?;
+        let blend = m.at(&p, BlendRule::default())?;
         // Computed in full before the caller's buffer is touched.
         let mut result = Vec::new();
         result.try_reserve_exact(values).map_err(|_| {
@@ -271,7 +271,7 @@ pub unsafe extern "C" fn brdf_atlas_model_locate(
         let location = unsafe { check::out(location, "location") }?;
         check::planar(m)?;
         let file = MerlFile::open(path)?;
-        let found = m.locate(&file)?;
+        let found = brdf_atlas_core::Located::find(m, &file)?;
         *location = BrdfAtlasLocation {
             x: found.point[0],
             y: found.point[1],

@@ -29,7 +29,7 @@ fn the_parameters_are_the_fit_of_the_points_material() {
     // The same numbers as the analytic crate's fit of the same material.
     let model = Model::open(&path).unwrap();
     let table = model
-        .at_with(&[x, y], BlendRule::default())
+        .at(&[x, y], BlendRule::default())
         .unwrap()
         .table()
         .unwrap();

@@ -98,10 +98,8 @@ fn default_samples_of_a_raw_model_give_the_exact_linear_map() {
     let s =
         unsafe { brdf_atlas_model_albedo_map(h.0, w, ht, null(), 0, map.as_mut_ptr(), map.len()) };
     assert_eq!(s, BrdfAtlasStatus::Ok, "{}", last_error());
-    let m = Model::open(&path).unwrap();
-    let want = m
-        .albedo_map(w, ht, View::default(), None, &NoProgress)
-        .unwrap();
+    let m = brdf_atlas_core::Atlas::new(Model::open(&path).unwrap());
+    let want = m.map(brdf_atlas_core::MapRequest::new(w, ht)).unwrap();
     let want: Vec<f32> = want.rgb.iter().flatten().copied().collect();
     assert_eq!(map, want);
 }
@@ -239,7 +237,7 @@ fn a_marker_reports_how_its_material_comes_back() {
     let tmp = tempfile::tempdir().unwrap();
     let path = fit(tmp.path(), 2, TransformKind::Log);
     let h = Handle::open(&path);
-    let m = Model::open(&path).unwrap();
+    let m = brdf_atlas_core::Atlas::new(Model::open(&path).unwrap());
     let own = &m
         .file()
         .fidelity

@@ -103,7 +103,7 @@ fn build_fixture() -> Fixture {
         precision: Precision::F32,
     };
     fit_dir(&data, &model_path, &options, &NoProgress).unwrap();
-    let m = Model::open(&model_path).unwrap();
+    let m = brdf_atlas_core::Atlas::new(Model::open(&model_path).unwrap());
 
     // Files for the bad calls.
     let corrupt = dir.join("corrupt.model");
@@ -152,7 +152,7 @@ fn build_fixture() -> Fixture {
     }
     for (k, p) in POINTS.iter().enumerate() {
         let file = dir.join(format!("point{k}.binary"));
-        m.at_with(p, BlendRule::default())
+        m.at(p, BlendRule::default())
             .unwrap()
             .table()
             .unwrap()
@@ -162,14 +162,14 @@ fn build_fixture() -> Fixture {
     }
     let far = [1e6, -1e300];
     let file = dir.join("far.binary");
-    m.at_with(&far, BlendRule::default())
+    m.at(&far, BlendRule::default())
         .unwrap()
         .table()
         .unwrap()
         .write(&file)
         .unwrap();
     line(&mut e, "far", &far, Some(&file));
-    let blend = m.at_with(&POINTS[0], BlendRule::default()).unwrap();
+    let blend = m.at(&POINTS[0], BlendRule::default()).unwrap();
     line(&mut e, "weights", blend.weights(), None);
     let pairs: [(Vec3, Vec3); 8] = [
         (direction(0.3, 0.0), direction(0.5, 2.0)),
@@ -194,7 +194,9 @@ fn build_fixture() -> Fixture {
     // The map of the default window with the default method (samples 0:
     // the model is in the log transform, so the albedo field where it fits
     // its budget), and one of another window.
-    let map = m.albedo_map(16, 12, v, None, &NoProgress).unwrap();
+    let map = m
+        .map(brdf_atlas_core::MapRequest::new(16, 12).view(v))
+        .unwrap();
     let file = dir.join("map.f32");
     write_map(&file, &map.rgb);
     line(&mut e, "map 16 12 0", &[], Some(&file));
@@ -204,7 +206,13 @@ fn build_fixture() -> Fixture {
         y0: -0.3,
         y1: 0.9,
     };
-    let map = m.albedo_map(9, 7, view, Some(64), &NoProgress).unwrap();
+    let map = m
+        .map(
+            brdf_atlas_core::MapRequest::new(9, 7)
+                .view(view)
+                .samples(Some(64)),
+        )
+        .unwrap();
     let file = dir.join("map2.f32");
     write_map(&file, &map.rgb);
     line(
@@ -213,7 +221,7 @@ fn build_fixture() -> Fixture {
         &[view.x0, view.x1, view.y0, view.y1],
         Some(&file),
     );
-    let found = m.locate(&MerlFile::open(&probe).unwrap()).unwrap();
+    let found = brdf_atlas_core::Located::find(&m, &MerlFile::open(&probe).unwrap()).unwrap();
     line(&mut e, "probe", &[], Some(&probe));
     line(
         &mut e,
@@ -373,9 +381,9 @@ fn readme_example_writes_the_reconstruction() {
         "the README example",
     );
     assert!(stdout.contains("wrote"), "{stdout}");
-    let m = Model::open(&f.model).unwrap();
+    let m = brdf_atlas_core::Atlas::new(Model::open(&f.model).unwrap());
     let want = f.dir.join("out/readme-rust.binary");
-    m.at_with(&[x, y], BlendRule::default())
+    m.at(&[x, y], BlendRule::default())
         .unwrap()
         .table()
         .unwrap()

@@ -38,7 +38,7 @@ fn fitted(dir: &Path, count: usize, seed: u64, transform: TransformKind) -> Path
 fn plausibility_confidence_and_rules_are_the_core_library_s() {
     let tmp = tempfile::tempdir().unwrap();
     let path = fitted(tmp.path(), 9, 4, TransformKind::Log);
-    let model = Model::open(&path).unwrap();
+    let model = brdf_atlas_core::Atlas::new(Model::open(&path).unwrap());
     let h = open(&path);
     let len = model.dims().values();
     for (x, y) in [(0.2, -0.3), (-1.0, 0.95), (20.0, 20.0)] {
@@ -47,7 +47,7 @@ fn plausibility_confidence_and_rules_are_the_core_library_s() {
             (BlendRule::Plausible, BRDF_ATLAS_BLEND_PLAUSIBLE),
             (BlendRule::Floor, BRDF_ATLAS_BLEND_FLOOR),
         ] {
-            let blend = model.at_with(&[x, y], rule).unwrap();
+            let blend = model.at(&[x, y], rule).unwrap();
             let (p, c) = (blend.plausibility().unwrap(), blend.confidence());
             let mut out = std::mem::MaybeUninit::<BrdfAtlasPlausibility>::zeroed();
             let status =
@@ -81,7 +81,10 @@ fn plausibility_confidence_and_rules_are_the_core_library_s() {
             unsafe { brdf_atlas_model_confidence(h, x, y, &mut v, &mut w) },
             BrdfAtlasStatus::Ok
         );
-        let c = model.at(&[x, y]).unwrap().confidence();
+        let c = model
+            .at(&[x, y], brdf_atlas_core::BlendRule::Gp)
+            .unwrap()
+            .confidence();
         assert_eq!((v, w), (c.variance, c.weight_sum));
     }
     // The floor rule (the default) gives the bits of the plain
@@ -115,7 +118,7 @@ fn plausibility_confidence_and_rules_are_the_core_library_s() {
 fn the_map_of_a_chosen_rule_is_the_core_library_s() {
     let tmp = tempfile::tempdir().unwrap();
     let path = fitted(tmp.path(), 7, 6, TransformKind::Raw);
-    let model = Model::open(&path).unwrap();
+    let model = brdf_atlas_core::Atlas::new(Model::open(&path).unwrap());
     let h = open(&path);
     let (w, ht) = (11, 9);
     let view = brdf_atlas_core::View::default();
@@ -128,7 +131,11 @@ fn the_map_of_a_chosen_rule_is_the_core_library_s() {
         (status, rgb)
     };
     let core = |rule| -> Vec<f32> {
-        let m = model.albedo_map_with(w, ht, view, None, rule, &NoProgress);
+        let m = model.map(
+            brdf_atlas_core::MapRequest::new(w, ht)
+                .view(view)
+                .rule(rule),
+        );
         m.unwrap().rgb.into_iter().flatten().collect()
     };
     // The floor's map is the default one, bit for bit; the GP's map of a

@@ -13,7 +13,6 @@ pub mod fuzz;
 
 use std::path::{Path, PathBuf};
 
-use brdf_atlas_core::View;
 use brdf_atlas_core::{FitOptions, fit_dir, store_path_for};
 use brdf_atlas_core::{GplvmParams, Model, NoProgress, Precision, TransformKind};
 use brdf_atlas_pictures::map_picture::{Picture, read_sidecar, write_sidecar};
@@ -250,9 +249,9 @@ pub fn small_model(dir: &Path) -> PathBuf {
 
 /// A map sidecar of `model` (2-D) at `path`: 6x5 pixels, as `map` writes it.
 pub fn small_sidecar(model: &Path, path: &Path) -> PathBuf {
-    let m = Model::open(model).expect("a valid model");
+    let m = brdf_atlas_core::Atlas::new(Model::open(model).expect("a valid model"));
     let map = m
-        .albedo_map(6, 5, View::default(), Some(16), &NoProgress)
+        .map(brdf_atlas_core::MapRequest::new(6, 5).samples(Some(16)))
         .expect("map");
     write_sidecar(path, &Picture::new(&m, map, 3).sidecar(model)).expect("write sidecar");
     path.to_path_buf()
@@ -285,7 +284,9 @@ fn model_variant(
 /// opening a model and its store must fail.
 pub fn model_cases(dir: &Path, model: &Path) -> Vec<Case> {
     let text = std::fs::read_to_string(model).expect("model");
-    let n = Model::open(model).expect("a valid model").names().len();
+    let n = brdf_atlas_core::Atlas::new(Model::open(model).expect("a valid model"))
+        .names()
+        .len();
     let raw =
         |name: &str, bytes: &[u8], want: &str| written(dir, name, bytes, want, Status::BadFile);
     let json = |name: &str, edit: &dyn Fn(&mut Value), want: &str| {

@@ -6,7 +6,7 @@
 use std::io::Cursor;
 use std::path::Path;
 
-use brdf_atlas_core::{BlendRule, CoreError, Model, Result, View};
+use brdf_atlas_core::{Atlas, BlendRule, CoreError, Result, View};
 use brdf_atomic::{PendingFile, stage};
 
 use crate::canvas::{Canvas, srgb, text_size};
@@ -36,25 +36,26 @@ pub fn grid_points(view: &View, grid: usize) -> Vec<[f64; 2]> {
         .collect()
 }
 
-/// Render the spheres of `model` at `points` (labelled `names`, if given),
+/// Render the spheres of `atlas`'s model at `points` (labelled `names`, if given),
 /// the material at each point formed by `rule` (the plausible rule's steps
 /// for all points in one pass over the store).
 /// [`CoreError::FileChanged`] if the store changed meanwhile.
 pub fn swatches(
-    model: &Model,
+    atlas: &Atlas,
     points: &[[f64; 2]],
     names: Option<&[String]>,
     size: usize,
     lights: &[Light],
     rule: BlendRule,
 ) -> Result<Vec<Swatch>> {
+    let model = atlas.model();
     let blends = match rule {
         BlendRule::Gp | BlendRule::Floor => points
             .iter()
-            .map(|p| model.at_with(p, rule))
+            .map(|p| model.at(p, rule))
             .collect::<Result<Vec<_>>>()?,
         BlendRule::Plausible => {
-            model.plausible_blends(&points.iter().map(|p| p.to_vec()).collect::<Vec<_>>())?
+            atlas.plausible_blends(&points.iter().map(|p| p.to_vec()).collect::<Vec<_>>())?
         }
     };
     let mut out = Vec::with_capacity(points.len());

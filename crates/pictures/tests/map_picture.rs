@@ -37,9 +37,9 @@ fn intersect(a: &[f32; 4], b: &[f32; 4]) -> bool {
 }
 
 /// Check every label of a `side`-pixel map of `model`; returns (labelled, left out).
-fn check_labels(model: &Model, side: usize, dir: &Path) -> (usize, usize) {
+fn check_labels(model: &brdf_atlas_core::Atlas, side: usize, dir: &Path) -> (usize, usize) {
     let map = model
-        .albedo_map(side, side, View::default(), Some(32), &NoProgress)
+        .map(brdf_atlas_core::MapRequest::new(side, side).samples(Some(32)))
         .unwrap();
     let picture = Picture::new(model, map, 8);
     let json = dir.join(format!("map-{side}.json"));
@@ -107,11 +107,11 @@ fn check_labels(model: &Model, side: usize, dir: &Path) -> (usize, usize) {
 #[test]
 fn labels_of_a_crowded_map_and_a_small_one_never_overlap() {
     let dir = tempfile::tempdir().unwrap();
-    let crowded = Model::open(fit(dir.path(), 100)).unwrap();
+    let crowded = brdf_atlas_core::Atlas::new(Model::open(fit(dir.path(), 100)).unwrap());
     let (placed, left) = check_labels(&crowded, 512, dir.path());
     assert!(placed >= 30, "{placed} labelled, {left} left out");
     assert!(left > 0, "100 names cannot all fit on 512 pixels");
-    let small = Model::open(fit(dir.path(), 16)).unwrap();
+    let small = brdf_atlas_core::Atlas::new(Model::open(fit(dir.path(), 16)).unwrap());
     let (placed, left) = check_labels(&small, 512, dir.path());
     assert_eq!((placed, left), (16, 0));
 }
@@ -157,7 +157,7 @@ fn dense_variance(model: &Model, x: [f64; 2]) -> f64 {
 #[test]
 fn variance_matches_a_dense_recomputation_and_the_fade_follows_the_rule() {
     let dir = tempfile::tempdir().unwrap();
-    let model = Model::open(fit(dir.path(), 12)).unwrap();
+    let model = brdf_atlas_core::Atlas::new(Model::open(fit(dir.path(), 12)).unwrap());
     // Wide enough to reach far from the data, where the model knows little.
     let view = View {
         x0: -4.0,
@@ -167,7 +167,11 @@ fn variance_matches_a_dense_recomputation_and_the_fade_follows_the_rule() {
     };
     let side = 96;
     let map = model
-        .albedo_map(side, side, view, Some(16), &NoProgress)
+        .map(
+            brdf_atlas_core::MapRequest::new(side, side)
+                .view(view)
+                .samples(Some(16)),
+        )
         .unwrap();
     let mut seed = 12345u64;
     for _ in 0..60 {
@@ -180,7 +184,7 @@ fn variance_matches_a_dense_recomputation_and_the_fade_follows_the_rule() {
             (got - want).abs() < 1e-5,
             "pixel ({px}, {py}): {got} vs {want}"
         );
-        let blend = model.at(&x).unwrap();
+        let blend = model.at(&x, brdf_atlas_core::BlendRule::Gp).unwrap();
         assert!((blend.confidence().variance - want).abs() < 1e-6);
     }
     assert_eq!(model.variance_map(side, side, view).unwrap(), map.variance);

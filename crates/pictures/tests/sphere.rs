@@ -73,7 +73,7 @@ fn fitted(
     dims: Dims,
     seed: u64,
     precision: Precision,
-) -> Model {
+) -> brdf_atlas_core::Atlas {
     let data = dir.join("data");
     synth::write_dir(&data, count, dims, seed).unwrap();
     let path = dir.join("m.atlas");
@@ -83,7 +83,7 @@ fn fitted(
         precision,
     };
     fit_dir(&data, &path, &options, &NoProgress).unwrap();
-    Model::open(&path).unwrap()
+    brdf_atlas_core::Atlas::new(Model::open(&path).unwrap())
 }
 
 #[test]
@@ -97,7 +97,7 @@ fn a_sphere_from_point_queries_equals_the_one_from_the_reconstructed_file() {
         Precision::F32,
     );
     let x = [0.31, -0.27];
-    let blend = model.at(&x).unwrap();
+    let blend = model.at(&x, brdf_atlas_core::BlendRule::Gp).unwrap();
     let lights = brdf_atlas_pictures::sphere::DEFAULT_LIGHTS;
     let from_model = render(&blend, 48, &lights);
     let merl = dir.path().join("there.binary");
@@ -138,7 +138,7 @@ fn plausible_swatches_are_the_spheres_of_the_plausible_reconstructions() {
         swatch_sheet::swatches(&model, &points, None, 24, &lights, BlendRule::Plausible).unwrap();
     let mut differ = 0;
     for (p, s) in points.iter().zip(&sheet) {
-        let alone = model.at_with(p, BlendRule::Plausible).unwrap();
+        let alone = model.at(p, BlendRule::Plausible).unwrap();
         let merl = dir.path().join("there.binary");
         alone.table().unwrap().write(&merl).unwrap();
         assert_eq!(
@@ -146,7 +146,14 @@ fn plausible_swatches_are_the_spheres_of_the_plausible_reconstructions() {
             render(&MerlTable::read(&merl).unwrap(), 24, &lights),
             "{p:?}"
         );
-        differ += usize::from(s.sphere != render(&model.at(p).unwrap(), 24, &lights));
+        differ += usize::from(
+            s.sphere
+                != render(
+                    &model.at(p, brdf_atlas_core::BlendRule::Gp).unwrap(),
+                    24,
+                    &lights,
+                ),
+        );
     }
     // The rule changed some of the spheres (else this compared GP spheres).
     assert!(differ > 0);

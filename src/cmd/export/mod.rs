@@ -107,7 +107,7 @@ impl Sources {
             }
             Sources::Points(model, points) => {
                 let (name, x) = &points[k];
-                let table = model.at_with(x, args.blend)?.table()?;
+                let table = model.at(x, args.blend)?.table()?;
                 Ok(Source {
                     origin: format!(
                         "{} at {} ({} blend)",

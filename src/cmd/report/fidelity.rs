@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 
 use brdf_atlas_core::fidelity::{Summary, fidelity, known_share, spacing};
 use brdf_atlas_core::{
-    BlendRule, DEFAULT_NOISE, DEFAULT_TRANSFORM, Dataset, GplvmParams, Kernel, Model, NoProgress,
+    Atlas, BlendRule, DEFAULT_NOISE, DEFAULT_TRANSFORM, Dataset, GplvmParams, Kernel, NoProgress,
     PAPER_KERNEL, PAPER_TRANSFORM, Precision, TransformKind, View, default_kernel,
 };
 use brdf_merl::synth::SplitMix64;
@@ -112,7 +112,9 @@ pub fn measure(
         let fit = params.fit(&b.gram, &NoProgress)?;
         let fit_time = built_time + t.elapsed();
         let name = format!("fidelity-{}", setting.transform.name());
-        let m = in_memory_model(work, &name, data, &fit, &b.store, &b.y, &b.gram)?;
+        let m = Atlas::new(in_memory_model(
+            work, &name, data, &fit, &b.store, &b.y, &b.gram,
+        )?);
         let f = fidelity(
             m.store(),
             m.latent().as_ref(),
@@ -140,7 +142,7 @@ pub fn measure(
 
 /// 90th percentile and worst of the largest directional albedo of the
 /// default material at random points of the default view (seed 1).
-fn max_albedo(m: &Model) -> Result<[f64; 2], Error> {
+fn max_albedo(m: &Atlas) -> Result<[f64; 2], Error> {
     let v = View::default();
     let mut rng = SplitMix64::new(1);
     let xs: Vec<[f64; 2]> = (0..PLAUSIBILITY_POINTS)

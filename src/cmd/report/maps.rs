@@ -5,9 +5,9 @@
 
 use std::time::Instant;
 
-use brdf_atlas_core::measure::map_error;
+use brdf_atlas_core::map_error::map_error;
 use brdf_atlas_core::{
-    AlbedoMethod, BlendRule, DEFAULT_SAMPLES, LATTICE_TOLERANCE, Model, NoProgress, View,
+    AlbedoMethod, Atlas, BlendRule, DEFAULT_SAMPLES, LATTICE_TOLERANCE, NoProgress, View,
 };
 
 use brdf_merl::Quadrature;
@@ -20,7 +20,7 @@ use crate::progress::Bars;
 
 /// The log map's error (against dense references on a small grid) and
 /// time for each sample count.
-pub fn samples(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error> {
+pub fn samples(model: &Atlas, plan: &Plan, r: &mut Results) -> Result<(), Error> {
     let view = View::default();
     let w = 4 * plan.grid;
     let pixels: Vec<(usize, usize)> = (0..plan.grid)
@@ -33,11 +33,20 @@ pub fn samples(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error>
     r.reference_pixels = pixels.len();
     let bars = Bars::new("map sample counts");
     for &s in &plan.samples {
-        let small = model.albedo_map(w, w, view, Some(s), &NoProgress)?;
+        let small = model.map(
+            brdf_atlas_core::MapRequest::new(w, w)
+                .view(view)
+                .samples(Some(s)),
+        )?;
         let (max_err, mean_err) = map_error(&small, &pixels, &reference);
         let size = plan.timed_size;
         let (map, time) = timed(plan.repeat, || {
-            Ok(model.albedo_map(size, size, view, Some(s), &bars)?)
+            Ok(model.map(
+                brdf_atlas_core::MapRequest::new(size, size)
+                    .view(view)
+                    .samples(Some(s))
+                    .progress(&bars),
+            )?)
         })?;
         let bins = match map.method {
             AlbedoMethod::Quadrature { bins, .. } => bins,
@@ -58,7 +67,7 @@ pub fn samples(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error>
 /// per-pixel rule with the default samples, at random pixels of the default
 /// view and of one a hundred times smaller: error against dense references
 /// and time, first and again (a field is kept by the model).
-pub fn methods(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error> {
+pub fn methods(model: &Atlas, plan: &Plan, r: &mut Results) -> Result<(), Error> {
     let size = plan.timed_size;
     let small = View::zoomed_hundredfold();
     let mut seed = 0x5eed_u64;
@@ -93,10 +102,18 @@ pub fn methods(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error>
                 continue;
             }
             let t = Instant::now();
-            let map = model.albedo_map(size, size, view, samples, &NoProgress)?;
+            let map = model.map(
+                brdf_atlas_core::MapRequest::new(size, size)
+                    .view(view)
+                    .samples(samples),
+            )?;
             let first = t.elapsed();
             let t = Instant::now();
-            model.albedo_map(size, size, view, samples, &NoProgress)?;
+            model.map(
+                brdf_atlas_core::MapRequest::new(size, size)
+                    .view(view)
+                    .samples(samples),
+            )?;
             let again = t.elapsed();
             let (max_err, mean_err) = map_error(&map, &pixels, &reference);
             let (method, field) = match map.method {
@@ -126,7 +143,11 @@ pub fn methods(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error>
             continue;
         };
         let t = Instant::now();
-        let map = model.albedo_map_prepared(lattice, size, size, view, &NoProgress)?;
+        let map = model.map(
+            brdf_atlas_core::MapRequest::new(size, size)
+                .view(view)
+                .lattice(lattice),
+        )?;
         let again = t.elapsed();
         let (max_err, mean_err) = map_error(&map, &pixels, &reference);
         r.methods.push(MethodRow {
@@ -146,10 +167,10 @@ pub fn methods(model: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error>
 
 /// The dense references of `pixels` of a `size x size` map of `view`
 /// (the default blend, integrated with `rule`): all of them from one pass
-/// over the rule's rows ([`Model::exact_albedos_by`], equal to
-/// [`brdf_atlas_core::measure::reference_albedo`] point by point to rounding).
+/// over the rule's rows ([`Atlas::exact_albedos`], equal to
+/// [`brdf_atlas_core::map_error::reference_albedo`] point by point to rounding).
 fn references(
-    model: &Model,
+    model: &Atlas,
     view: &View,
     pixels: &[(usize, usize)],
     size: usize,
@@ -159,12 +180,15 @@ fn references(
         .iter()
         .map(|&(px, py)| view.pixel_to_latent(px as f64, py as f64, size, size))
         .collect();
-    Ok(model.exact_albedos_by(&points, BlendRule::default(), rule)?)
+    Ok(model.exact_albedos(
+        &points,
+        brdf_atlas_core::AlbedoRequest::new().integration(brdf_atlas_core::Integration::Rule(rule)),
+    )?)
 }
 
 /// The time of a map of each size, log (default samples; the sample
 /// sweep's at its size) and raw (linear).
-pub fn sizes(log: &Model, raw: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error> {
+pub fn sizes(log: &Atlas, raw: &Atlas, plan: &Plan, r: &mut Results) -> Result<(), Error> {
     let view = View::default();
     // The sample sweep timed this map already at its size.
     let swept = r
@@ -177,7 +201,11 @@ pub fn sizes(log: &Model, raw: &Model, plan: &Plan, r: &mut Results) -> Result<(
             Some(t) if s == plan.timed_size => t,
             _ => {
                 timed(plan.repeat, || {
-                    Ok(log.albedo_map(s, s, view, Some(DEFAULT_SAMPLES), &NoProgress)?)
+                    Ok(log.map(
+                        brdf_atlas_core::MapRequest::new(s, s)
+                            .view(view)
+                            .samples(Some(DEFAULT_SAMPLES)),
+                    )?)
                 })?
                 .1
             }
@@ -188,7 +216,7 @@ pub fn sizes(log: &Model, raw: &Model, plan: &Plan, r: &mut Results) -> Result<(
             time: t,
         });
         let (_, t) = timed(plan.repeat, || {
-            Ok(raw.albedo_map(s, s, view, None, &NoProgress)?)
+            Ok(raw.map(brdf_atlas_core::MapRequest::new(s, s).view(view))?)
         })?;
         r.sizes.push(SizeRow {
             method: "raw, linear".into(),

@@ -9,8 +9,8 @@ use std::time::{Duration, Instant};
 
 use brdf_atlas_core::loo::{self, Evaluation};
 use brdf_atlas_core::{
-    Dataset, Fit, GplvmParams, GramData, Model, ModelFile, NoProgress, OptimizerKind, Precision,
-    Store, StoreRef, TransformKind, build_store,
+    Atlas, Dataset, Fit, GplvmParams, GramData, Model, ModelFile, NoProgress, OptimizerKind,
+    Precision, Store, StoreRef, TransformKind, build_store,
 };
 use faer::Mat;
 
@@ -69,7 +69,7 @@ pub fn measure(
             let raw_model =
                 in_memory_model(work, "raw-f32", data, rf, &raw.store, &raw.y, &raw.gram)?;
             compare_precision(&log_model, &log64, plan, r)?;
-            Some((log_model, raw_model))
+            Some((Atlas::new(log_model), Atlas::new(raw_model)))
         }
         _ => None,
     };
@@ -96,7 +96,13 @@ pub fn measure(
         if let Some(lf) = &log.learned {
             let learned =
                 in_memory_model(work, "log-learned", data, lf, &log.store, &log.y, &log.gram)?;
-            super::plausible::measure(&learned, TransformKind::Log, "learned", plan, r)?;
+            super::plausible::measure(
+                &Atlas::new(learned),
+                TransformKind::Log,
+                "learned",
+                plan,
+                r,
+            )?;
         }
         super::plausible::measure(raw_model, TransformKind::Raw, "fixed", plan, r)?;
     }
@@ -419,8 +425,12 @@ fn probe_points(model: &Model, count: usize) -> Vec<Vec<f64>> {
 /// Full reconstructions from the f32 and the f64 store at the same points.
 fn compare_precision(m32: &Model, m64: &Model, plan: &Plan, r: &mut Results) -> Result<(), Error> {
     for x in probe_points(m32, plan.points) {
-        let (a, time32) = timed(plan.repeat, || Ok(m32.at(&x)?.table()?))?;
-        let (b, time64) = timed(plan.repeat, || Ok(m64.at(&x)?.table()?))?;
+        let (a, time32) = timed(plan.repeat, || {
+            Ok(m32.at(&x, brdf_atlas_core::BlendRule::Gp)?.table()?)
+        })?;
+        let (b, time64) = timed(plan.repeat, || {
+            Ok(m64.at(&x, brdf_atlas_core::BlendRule::Gp)?.table()?)
+        })?;
         let dims = a.dims();
         let (mut max_abs, mut peak, mut sum2, mut count) = (0.0f64, 0.0f64, 0.0f64, 0usize);
         for c in 0..3 {

@@ -6,7 +6,7 @@
 use std::io::{self, Write};
 use std::path::Path;
 
-use brdf_atlas_core::{BlendRule, Model, TransformKind, View};
+use brdf_atlas_core::{Atlas, BlendRule, TransformKind, View};
 
 use super::csv::e;
 use super::plan::Plan;
@@ -156,7 +156,7 @@ pub fn markdown(w: &mut dyn Write, r: &Results, plan: &Plan) -> io::Result<()> {
                  function of the point's weights only): log RMSE {:.5} ({:+.1}% against the \
                  GP's weights).\n",
                 t.name(),
-                brdf_atlas_core::floor::FLOOR_SHARE,
+                brdf_atlas_core::soft_floor::FLOOR_SHARE,
                 fl.log,
                 100.0 * (fl.log / base.log - 1.0),
             )?;
@@ -201,7 +201,7 @@ fn grid_points(grid: usize) -> Vec<[f64; 2]> {
 /// `model` (of `transform`) at the grid's points under every blend rule,
 /// the clamp's figures on the plan's bins.
 pub fn measure(
-    model: &Model,
+    model: &Atlas,
     transform: TransformKind,
     kernel: &'static str,
     plan: &Plan,
@@ -211,7 +211,12 @@ pub fn measure(
     // The predictive variance depends on the point, not on the rule.
     let variance = points
         .iter()
-        .map(|x| Ok(model.at(x)?.confidence().variance))
+        .map(|x| {
+            Ok(model
+                .at(x, brdf_atlas_core::BlendRule::Gp)?
+                .confidence()
+                .variance)
+        })
         .collect::<Result<Vec<f64>, Error>>()?;
     // The soft floor's and the GP's figures of every point from one pass
     // over the store, the plausible rule's from its own (its steps from one

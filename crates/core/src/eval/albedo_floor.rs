@@ -16,7 +16,7 @@ use brdf_merl::directional::{INCIDENCE_DEGREES, largest};
 use crate::data::store::Store;
 use crate::dense::product::matmul;
 use crate::error::Result;
-use crate::query::budget::STEPS;
+use crate::model::blend::plausible_budget::STEPS;
 use crate::simd::fold::{GROUPS, ordered_blocks_then};
 
 /// Bins of the rule per block of the pass.

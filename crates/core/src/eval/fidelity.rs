@@ -122,12 +122,12 @@ fn judge(ev: &Evaluation, m: usize) -> Vec<Judged> {
 }
 
 /// The material `truth` (a MERL table of the model's dims, such as a file
-/// [`crate::Model::locate`] placed at `x`) judged against the model's
+/// [`crate::Located::find`] placed at `x`) judged against the model's
 /// material at `x` by the default rule: relative albedo per channel (the
 /// dense rule over both full tables) and the table errors over the bins
 /// measured in `truth` that are not grazing.
 pub fn judge_at(model: &crate::Model, x: &[f64], truth: &MerlTable) -> Result<Judged> {
-    let table = model.at_with(x, crate::BlendRule::Floor)?.table()?;
+    let table = model.at(x, crate::BlendRule::Floor)?.table()?;
     Ok(judge_tables(model.albedo_rule(), truth, &table))
 }
 
@@ -212,7 +212,7 @@ pub fn known_share(model: &crate::Model, k: usize) -> Result<f64> {
     for a in 0..k {
         for b in 0..k {
             let x = [v.x0 + (v.x1 - v.x0) * t(a), v.y0 + (v.y1 - v.y0) * t(b)];
-            known += usize::from(model.at(&x)?.confidence().variance < 0.1);
+            known += usize::from(model.at(&x, crate::BlendRule::Gp)?.confidence().variance < 0.1);
         }
     }
     Ok(known as f64 / (k * k) as f64)

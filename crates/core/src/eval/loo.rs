@@ -39,8 +39,8 @@ use super::score::{RowIds, RowScratch, Scoring, Sums, score_block};
 use crate::data::store::Store;
 use crate::data::transform::{InverseForm, TransformKind};
 use crate::error::{ParamError, Result};
+use crate::model::blend::soft_floor::{floor_points, floor_points_each, top_of};
 use crate::progress::Progress;
-use crate::query::floor::{floor_points, floor_points_each, top_of};
 use crate::simd::fold::{GROUPS, ordered_blocks_then};
 
 /// Rows of the store per block of the LOO pass.
@@ -49,8 +49,8 @@ const BLOCK: usize = 1024;
 pub use super::nonneg::{banded_steps, convex_predictor, plausible_predictors};
 pub use super::predictors::{discarded, gp_predictor, pca_in_sample_predictor, pca_predictor};
 pub use super::projected::{capped_simplex, projected_predictor};
-pub use crate::query::budget::{CLAMP_BUDGET, CONVEX_LENGTH_RATIO, STEPS};
-pub use crate::query::every::Every;
+pub use crate::model::blend::pass_bins::Every;
+pub use crate::model::blend::plausible_budget::{CLAMP_BUDGET, CONVEX_LENGTH_RATIO, STEPS};
 
 /// Squared errors of one predictor, per material.
 #[derive(Debug, Clone, PartialEq)]

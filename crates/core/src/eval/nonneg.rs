@@ -1,6 +1,6 @@
 //! The leave-one-out predictions of [`crate::BlendRule::Plausible`]: each
 //! held-out material predicted as a reconstruction at its latent point
-//! would be, from the others (see [`crate::query::budget`]). The GP's
+//! would be, from the others (see [`crate::model::blend::plausible_budget`]). The GP's
 //! weights `w` move towards the kernel's convex weights `v` (a
 //! kernel-weighted average of the materials, plausible by construction):
 //! `w + t (v - w)`, with the smallest `t` of [`STEPS`] for which the
@@ -18,9 +18,9 @@ use crate::data::store::Store;
 use crate::dense::product::matmul;
 use crate::error::{ParamError, Result};
 use crate::gplvm::kernel::{Kernel, rows_of};
+use crate::model::blend::pass_bins::Every;
+use crate::model::blend::plausible_budget::{Budget, STEPS, convex_weights, counted};
 use crate::progress::Progress;
-use crate::query::budget::{Budget, STEPS, convex_weights, counted};
-use crate::query::every::Every;
 use crate::simd::fold::{GROUPS, ordered_blocks_then};
 
 /// Rows of the store per block of the pass.

@@ -1,12 +1,11 @@
 //! A fitted model: the latent points and kernel of a model file, its store
-//! mapped, and `K` factorised, ready for queries (`crate::query`: the
+//! mapped, and `K` factorised, ready for queries (`crate::maps`: the
 //! material at a latent point, maps, locating a new material).
 //!
 //! - [`file`]: the model file's format (JSON beside the store);
 //! - [`Model`]: opened from disk ([`Model::open`]) or assembled in memory
 //!   ([`Model::new`]).
 
-use std::any::Any;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
@@ -18,12 +17,13 @@ use crate::data::Store;
 use crate::data::transform::Transform;
 use crate::dense::Cholesky;
 use crate::error::{CoreError, Result};
+use crate::model::blend::plausible_budget::convex_weights_at;
+use crate::model::blend::plausible_steps::plausible_blends;
+use crate::model::blend::{Blend, BlendRule};
 
+pub mod blend;
 pub mod file;
 pub mod judged;
-mod recent;
-
-pub(crate) use recent::Recent;
 
 pub use file::{FitRecord, InputIdentity, ModelFile, StoreRef, store_path_for};
 
@@ -36,8 +36,8 @@ pub struct Model {
     llt: Cholesky,
     transform: Box<dyn Transform>,
     gram: Mat<f64>,
-    /// What every map of this model shares, built on first use.
-    map_basis: MapBasis,
+    /// See [`Model::albedo_rule`].
+    albedo_rule: OnceLock<Quadrature>,
     /// See [`Model::cosine_products`].
     cosines: OnceLock<Vec<f64>>,
     /// See [`Model::directional_rule`].
@@ -146,7 +146,7 @@ impl Model {
             llt,
             transform,
             gram,
-            map_basis: MapBasis::default(),
+            albedo_rule: OnceLock::new(),
             cosines: OnceLock::new(),
             directional: OnceLock::new(),
         })
@@ -188,7 +188,7 @@ impl Model {
     }
 
     /// `K^-1 B` for a right-hand side with `N` rows.
-    pub fn llt_solve(&self, b: &Mat<f64>) -> Mat<f64> {
+    pub(crate) fn llt_solve(&self, b: &Mat<f64>) -> Mat<f64> {
         self.llt.solve(b.as_ref())
     }
 
@@ -244,9 +244,31 @@ impl Model {
         self.transform.as_ref()
     }
 
-    /// What every map of this model shares.
-    pub(crate) fn map_basis(&self) -> &MapBasis {
-        &self.map_basis
+    /// The dense albedo rule of the model's dims (2 sub-cells a bin), built once.
+    pub fn albedo_rule(&self) -> &Quadrature {
+        self.albedo_rule
+            .get_or_init(|| Quadrature::dense(self.dims(), 2))
+    }
+
+    /// The material at latent point `x` (`q` finite coordinates) under
+    /// `rule`: the GP's blend ([`BlendRule::Gp`]), every value on its soft
+    /// floor ([`BlendRule::Floor`], the default), or the plausible rule's
+    /// steps ([`BlendRule::Plausible`], a pass over the store).
+    /// [`CoreError::FileChanged`] once the store is known to have changed
+    /// (a model refuses every query then).
+    pub fn at(&self, x: &[f64], rule: BlendRule) -> Result<Blend<'_>> {
+        match rule {
+            BlendRule::Gp => Blend::gp_at(self, x),
+            BlendRule::Plausible => {
+                let mut blends = plausible_blends(self, &[x.to_vec()])?;
+                Ok(blends.pop().expect("one blend a point"))
+            }
+            BlendRule::Floor => {
+                let gp = Blend::gp_at(self, x)?;
+                let convex = convex_weights_at(self, &[x]).pop().expect("one point");
+                Ok(gp.with_floor(convex))
+            }
+        }
     }
 }
 
@@ -271,39 +293,6 @@ fn check_store(file: &ModelFile, store: &Store) -> Result<()> {
         ));
     }
     Ok(())
-}
-
-/// The parts of a map that depend on the model only, not on the view, size
-/// or sample count: built by the first map that needs them and kept, so
-/// that a viewer redrawing the map on every zoom or pan (the BRDF Explorer
-/// plugin does) pays once for the passes over the store behind them. The
-/// map fills them (`crate::query::map`).
-#[derive(Default)]
-pub(crate) struct MapBasis {
-    /// The dense albedo rule with 2 sub-cells a bin.
-    pub(crate) rule: OnceLock<Quadrature>,
-    /// The linear map's `K^-1 A` (one N-vector per channel) and the mean's albedo.
-    pub(crate) linear: OnceLock<([Vec<f64>; 3], [f64; 3])>,
-    /// The mean material's shape inside each quadrature box.
-    pub(crate) shape: OnceLock<Vec<f64>>,
-    /// The dense rule's store rows and weights (`crate::query::exact`'s
-    /// `RuleRows`; held by type so that the model does not name the query).
-    pub(crate) rule_rows: OnceLock<Box<dyn Any + Send + Sync>>,
-    /// The rows of the map's nodes: the dense rule on fewer phi_d bins
-    /// (`crate::query::exact`'s `RuleRows`).
-    pub(crate) node_rows: OnceLock<Box<dyn Any + Send + Sync>>,
-    /// The rows of the map's per-pixel rule at its default sample count,
-    /// which plan a field (`crate::query::exact`'s `RuleRows`).
-    pub(crate) plan_rows: OnceLock<Box<dyn Any + Send + Sync>>,
-    /// The last albedo fields built, and domains given up
-    /// (`crate::query::field`'s cache entries).
-    pub(crate) fields: Recent,
-    /// The map's last per-pixel rules (`crate::query::map`'s `PixelRule`),
-    /// one a sample count.
-    pub(crate) pixel_rules: Recent,
-    /// The prepared map saved beside the model, read on first use
-    /// (`crate::query::lattice`'s load result).
-    pub(crate) lattice: OnceLock<Box<dyn Any + Send + Sync>>,
 }
 
 #[cfg(test)]
@@ -551,8 +540,12 @@ mod tests {
         for x in [[0.1, -0.3], [0.9, 0.9], [-2.0, 0.5]] {
             assert_eq!(disk.weights_at(&x).unwrap(), memory.weights_at(&x).unwrap());
             let (a, b) = (
-                disk.at(&x).unwrap().table().unwrap(),
-                memory.at(&x).unwrap().table().unwrap(),
+                disk.at(&x, crate::BlendRule::Gp).unwrap().table().unwrap(),
+                memory
+                    .at(&x, crate::BlendRule::Gp)
+                    .unwrap()
+                    .table()
+                    .unwrap(),
             );
             assert_eq!(a.raw(), b.raw());
         }

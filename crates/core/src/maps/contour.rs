@@ -1,6 +1,6 @@
 //! Luminance contours of an albedo map, by marching squares.
 
-use super::map::AlbedoMap;
+use super::albedo_map::AlbedoMap;
 
 /// Luminance of linear RGB (Rec. 709 weights).
 pub fn luminance(c: [f32; 3]) -> f32 {

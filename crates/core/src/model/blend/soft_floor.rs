@@ -3,7 +3,7 @@
 //!
 //! Row by row (one channel of one bin), `g` is the GP's blend `mean + w . z`
 //! and `c` the convex blend `mean + v . z` in transformed space (`v` the
-//! kernel's convex weights, [`crate::query::budget::convex_weights`]). Both
+//! kernel's convex weights, [`crate::model::blend::plausible_budget::convex_weights`]). Both
 //! transforms send reflectance `f >= 0` to values `>= 0`, so `c >= 0`: a
 //! convex blend of materials is a material. The rule's value is
 //!

@@ -24,11 +24,11 @@ use brdf_merl::MerlTable;
 
 use crate::error::Result;
 use crate::model::Model;
-use crate::query::reconstruct::Blend;
+use crate::model::blend::reconstruct::Blend;
 
 /// Rows a worker handles at once (fixed, so sums do not depend on the thread
 /// count; the table's, so [`Blend::table_and_plausibility`] sums alike).
-const CHUNK: usize = crate::query::reconstruct::TABLE_CHUNK;
+const CHUNK: usize = crate::model::blend::reconstruct::TABLE_CHUNK;
 
 /// Above this predictive variance (out of the prior's 1) a point is reported
 /// as one where the model knows little: the data explain less than half of
@@ -61,7 +61,7 @@ pub enum BlendRule {
     /// blend's (the convex weights `v` of [`BlendRule::Plausible`]): a row
     /// with GP value `g` and convex value `c` becomes
     /// `c h(g / c)`, `h` a smooth maximum of `g / c` and
-    /// [`crate::query::floor::FLOOR_SHARE`] ([`crate::query::floor`]). No
+    /// [`crate::model::blend::soft_floor::FLOOR_SHARE`] ([`crate::model::blend::soft_floor`]). No
     /// value is ever clamped, values well above the floor keep the GP's,
     /// and each value depends on the point's two weight vectors alone: no
     /// pass over the store, and the material varies smoothly over the map.
@@ -131,60 +131,42 @@ impl Confidence {
     }
 }
 
-impl Model {
-    /// The blend at `x` under `rule`.
-    pub fn at_with(&self, x: &[f64], rule: BlendRule) -> Result<Blend<'_>> {
-        match rule {
-            BlendRule::Gp => self.at(x),
-            BlendRule::Plausible => {
-                let mut blends = self.plausible_blends(&[x.to_vec()])?;
-                Ok(blends.pop().expect("one blend a point"))
-            }
-            BlendRule::Floor => {
-                let gp = self.at(x)?;
-                let convex = self.convex_weights_at(&[x]).pop().expect("one point");
-                Ok(gp.with_floor(convex))
-            }
-        }
-    }
-
-    /// The largest directional albedo of each of `blends`, the bits of
-    /// [`Blend::largest_albedo`] (point queries at the bins of the
-    /// directional rule only): each
-    /// incidence's sums run over the rule's bins in the rule's order for
-    /// every blend, as [`brdf_merl::DirectionalRule::integrate`] sums them,
-    /// but a bin's rows are read once for all the blends (while they are in
-    /// cache) rather than once a blend. The incidence angles in parallel.
-    /// With each albedo, its incidence (degrees from the normal).
-    pub(crate) fn max_albedos_of(&self, blends: &[&Blend<'_>]) -> Vec<(f64, f64)> {
-        let rule = self.directional_rule();
-        let m = blends.len();
-        let by_incidence: Vec<Vec<[f64; 3]>> = (0..INCIDENCE_DEGREES.len())
-            .into_par_iter()
-            .map(|k| {
-                let entries = rule.start_of(k)..rule.start_of(k + 1);
-                let mut acc = vec![[0.0f64; 3]; m];
-                for (&b, &w) in rule.bins()[entries.clone()]
-                    .iter()
-                    .zip(&rule.weights()[entries])
-                {
-                    for (acc, blend) in acc.iter_mut().zip(blends) {
-                        let v = blend.rgb_once(b as usize).unwrap_or([0.0; 3]);
-                        for c in 0..3 {
-                            acc[c] += w * v[c];
-                        }
+/// The largest directional albedo of each of `blends`, the bits of
+/// [`Blend::largest_albedo`] (point queries at the bins of the
+/// directional rule only): each
+/// incidence's sums run over the rule's bins in the rule's order for
+/// every blend, as [`brdf_merl::DirectionalRule::integrate`] sums them,
+/// but a bin's rows are read once for all the blends (while they are in
+/// cache) rather than once a blend. The incidence angles in parallel.
+/// With each albedo, its incidence (degrees from the normal).
+pub(crate) fn max_albedos_of(model: &Model, blends: &[&Blend<'_>]) -> Vec<(f64, f64)> {
+    let rule = model.directional_rule();
+    let m = blends.len();
+    let by_incidence: Vec<Vec<[f64; 3]>> = (0..INCIDENCE_DEGREES.len())
+        .into_par_iter()
+        .map(|k| {
+            let entries = rule.start_of(k)..rule.start_of(k + 1);
+            let mut acc = vec![[0.0f64; 3]; m];
+            for (&b, &w) in rule.bins()[entries.clone()]
+                .iter()
+                .zip(&rule.weights()[entries])
+            {
+                for (acc, blend) in acc.iter_mut().zip(blends) {
+                    let v = blend.rgb_once(b as usize).unwrap_or([0.0; 3]);
+                    for c in 0..3 {
+                        acc[c] += w * v[c];
                     }
                 }
-                acc
-            })
-            .collect();
-        (0..m)
-            .map(|j| {
-                let albedos: Vec<[f64; 3]> = by_incidence.iter().map(|a| a[j]).collect();
-                largest(&albedos)
-            })
-            .collect()
-    }
+            }
+            acc
+        })
+        .collect();
+    (0..m)
+        .map(|j| {
+            let albedos: Vec<[f64; 3]> = by_incidence.iter().map(|a| a[j]).collect();
+            largest(&albedos)
+        })
+        .collect()
 }
 
 impl Blend<'_> {

@@ -1,35 +1,36 @@
-//! What a model does with its prepared map ([`crate::query::lattice`]):
-//! build it ([`Model::prepare_map`]), read the one saved beside it
-//! ([`Model::prepared_map`]), and draw maps with it, the pixels in its
+//! What a model does with its prepared map ([`crate::maps::lattice`]):
+//! build it ([`Atlas::prepare_map`]), read the one saved beside it
+//! ([`Atlas::prepared_map`]), and draw maps with it, the pixels in its
 //! window from its cubic and the strips outside as without it.
 
 use std::collections::HashMap;
 use std::sync::{Arc, OnceLock};
 
 use crate::error::{CoreError, Result};
-use crate::model::Model;
-use crate::progress::Progress;
-use crate::query::exact::floor_of;
-use crate::query::lattice::{
+use crate::maps::Atlas;
+use crate::maps::albedo_map::{AlbedoMap, AlbedoMethod};
+use crate::maps::exact_albedos::{AlbedoRequest, Integration};
+use crate::maps::lattice::{
     AlbedoLattice, CHUNK, COARSEST, Drawn, FINEST, Key, Loaded, cubic, grids_of, lattice_path,
     relative_error, stencil_keys,
 };
-use crate::query::map::{AlbedoMap, AlbedoMethod};
-use crate::query::plausibility::BlendRule;
-use crate::query::view::View;
+use crate::maps::view::View;
+use crate::model::blend::pass_weights::floor_of;
+use crate::model::blend::plausibility::BlendRule;
+use crate::progress::Progress;
 
-impl Model {
+impl Atlas {
     /// A fingerprint of the fit (its model file's content): a lattice built
     /// from another fit is not used.
     pub fn fingerprint(&self) -> String {
-        let text = serde_json::to_vec(self.file()).unwrap_or_default();
+        let text = serde_json::to_vec(self.model.file()).unwrap_or_default();
         format!("{:016x}", xxhash_rust::xxh3::xxh3_64(&text))
     }
 
     /// Build the prepared map of the default view of `rule`'s material
     /// (the gp or floor rule), refined until each cell's cubic is within
     /// `tolerance` of the exact albedos at the finer lattice's new nodes
-    /// ([`crate::query::lattice`]). Several minutes on two cores for 100 materials at full
+    /// ([`crate::maps::lattice`]). Several minutes on two cores for 100 materials at full
     /// resolution (about ten thousand exact albedos). Cancelled through
     /// `progress` it returns [`CoreError::Cancelled`].
     pub fn prepare_map(
@@ -68,7 +69,12 @@ impl Model {
                         return Err(CoreError::Cancelled);
                     }
                     let points: Vec<[f64; 2]> = chunk.iter().map(|&k| point(k)).collect();
-                    let albedos = self.node_albedos_with(&points, rule)?;
+                    let albedos = self.exact_albedos(
+                        &points,
+                        AlbedoRequest::new()
+                            .rule(rule)
+                            .integration(Integration::Nodes),
+                    )?;
                     nodes.extend(chunk.iter().copied().zip(albedos));
                     progress.advance(chunk.len() as u64);
                 }
@@ -139,7 +145,7 @@ impl Model {
             })
             .collect();
         fill(&mut nodes, keys, "lattice, the cells' last nodes")?;
-        self.verify()?;
+        self.model.verify()?;
         Ok(AlbedoLattice {
             view,
             rule,
@@ -155,9 +161,9 @@ impl Model {
 
     /// A `width x height` map of `view` of `lattice`'s material, drawn with
     /// `lattice` whether or not it is saved beside the model: the pixels in
-    /// its window from its cubic, the rest as [`Model::albedo_map_with`]
-    /// draws them without it. A lattice of another fit is refused.
-    pub fn albedo_map_prepared(
+    /// its window from its cubic, the rest as [`Atlas::map`] draws them
+    /// without it. A lattice of another fit is refused.
+    pub(crate) fn map_prepared(
         &self,
         lattice: &AlbedoLattice,
         width: usize,
@@ -168,17 +174,17 @@ impl Model {
         if lattice.fingerprint != self.fingerprint() {
             return Err(CoreError::BadQuery(format!(
                 "the lattice was built from another fit than {}",
-                self.path().display()
+                self.model.path().display()
             )));
         }
         self.check_map_request(width, height, view)?;
         match self.lattice_map(lattice, (width, height, view), progress)? {
             Some(map) => Ok(map),
-            None => self.albedo_map_with(width, height, view, None, lattice.rule, progress),
+            None => self.draw(width, height, view, None, lattice.rule, progress),
         }
     }
 
-    /// [`Model::draw_prepared`] as a map; `None` if no pixel lies in the
+    /// [`Atlas::draw_prepared`] as a map; `None` if no pixel lies in the
     /// lattice's window.
     pub(crate) fn lattice_map(
         &self,
@@ -249,7 +255,7 @@ impl Model {
                 y0: view.y1 - dy * sr.end as f64,
                 y1: view.y1 - dy * sr.start as f64,
             };
-            let map = self.albedo_map_with(sc.len(), sr.len(), strip, None, rule, progress)?;
+            let map = self.draw(sc.len(), sr.len(), strip, None, rule, progress)?;
             for (k, py) in sr.clone().enumerate() {
                 let (from, to) = (
                     k * sc.len()..(k + 1) * sc.len(),
@@ -267,8 +273,8 @@ impl Model {
     /// first use: `Ok(None)` when there is none, an error naming the file
     /// when it cannot be used (damaged, or built from another fit).
     pub fn prepared_map(&self) -> Result<Option<Arc<AlbedoLattice>>> {
-        let slot = self.map_basis().lattice.get_or_init(|| {
-            let path = lattice_path(self.path());
+        let slot: &Loaded = self.lattice.get_or_init(|| {
+            let path = lattice_path(self.model.path());
             let loaded: Loaded = if path.exists() {
                 AlbedoLattice::load(&path, self)
                     .map(|l| Some(Arc::new(l)))
@@ -276,11 +282,8 @@ impl Model {
             } else {
                 Ok(None)
             };
-            Box::new(loaded)
+            loaded
         });
-        let slot: &Loaded = slot
-            .downcast_ref()
-            .expect("the model's lattice slot holds Loaded");
         match slot {
             Ok(l) => Ok(l.clone()),
             Err(why) => Err(CoreError::BadQuery(why.clone())),

@@ -11,7 +11,7 @@
 //! - **Field** (log transform): the inverse transform is not linear, but
 //!   the albedo is a smooth function of the latent point: exact albedos at
 //!   the nodes of refined grids, and the polynomial through them at every
-//!   pixel, with an error estimate ([`crate::query::field`]). The predictive
+//!   pixel, with an error estimate ([`crate::maps::albedo_field`]). The predictive
 //!   variance is interpolated the same way.
 //! - **Quadrature** (on request, `samples`): each pixel reconstructs exactly the bins of a quadrature
 //!   rule with `samples` points and integrates them. The rows the rule needs
@@ -29,17 +29,21 @@ use serde::{Deserialize, Serialize};
 use crate::data::store::Rows;
 use crate::dense::product::matmul;
 use crate::error::{CoreError, Result};
-use crate::model::Model;
-use crate::progress::Progress;
-use crate::query::exact::{RuleRows, floor_of};
-use crate::query::field::{eval_row, variances};
-use crate::query::floor::floor_rows;
-use crate::query::plausibility::BlendRule;
-pub use crate::query::view::View;
+use crate::maps::Atlas;
+use crate::maps::albedo_field::FieldRequest;
+use crate::maps::albedo_field::{eval_row, variances};
+use crate::maps::exact_albedos::RuleRows;
+use crate::maps::lattice::AlbedoLattice;
+pub use crate::maps::view::View;
+use crate::model::blend::pass_weights::floor_of;
+use crate::model::blend::plausibility::BlendRule;
+use crate::model::blend::plausible_budget::convex_weights_at;
+use crate::model::blend::soft_floor::floor_rows;
+use crate::progress::{NoProgress, Progress};
 use crate::simd::dot;
 use crate::simd::fastexp;
 
-pub use crate::query::exact::DEFAULT_SAMPLES;
+pub use crate::maps::exact_albedos::DEFAULT_SAMPLES;
 
 /// How a map's albedo was computed.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -49,7 +53,7 @@ pub enum AlbedoMethod {
     Linear,
     /// A polynomial through exact albedos (the dense rule over the full
     /// reconstruction) at the nodes of grids on patches of the view's
-    /// domain ([`crate::query::field`]).
+    /// domain ([`crate::maps::albedo_field`]).
     Field {
         /// Exact albedos the field holds.
         nodes: usize,
@@ -59,7 +63,7 @@ pub enum AlbedoMethod {
         estimate: f64,
     },
     /// The cubic of the prepared map's adaptive lattice of exact albedos
-    /// ([`crate::query::lattice`]), saved beside the model.
+    /// ([`crate::maps::lattice`]), saved beside the model.
     Lattice {
         /// Exact albedos the lattice holds.
         nodes: usize,
@@ -99,11 +103,89 @@ pub struct AlbedoMap {
     pub blend: BlendRule,
 }
 
-impl Model {
+/// What [`Atlas::map`] draws: a `width x height` image of the default view,
+/// of the default rule's material ([`BlendRule::default`], the soft floor),
+/// the method chosen by the atlas, without a given prepared map and without
+/// progress reports, unless set.
+///
+/// ```
+/// use brdf_atlas_core::{BlendRule, MapRequest, View};
+///
+/// let request = MapRequest::new(256, 256)
+///     .view(View::zoomed_hundredfold())
+///     .rule(BlendRule::Gp)
+///     .samples(Some(64));
+/// # let _ = request;
+/// ```
+#[derive(Clone, Copy)]
+pub struct MapRequest<'a> {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// The latent window shown.
+    pub view: View,
+    /// `None`: the atlas chooses (prepared map, albedo field, per-pixel
+    /// rule or the linear shortcut); `Some(s)`: each pixel integrated with
+    /// an `s`-point rule.
+    pub samples: Option<usize>,
+    /// The material at each pixel: the GP's blend or the soft floor's.
+    pub rule: BlendRule,
+    /// A prepared map to draw with, whether or not it is saved beside the
+    /// model (its own rule is drawn).
+    pub lattice: Option<&'a AlbedoLattice>,
+    /// Told of the rows drawn, and asked whether to stop.
+    pub progress: &'a dyn Progress,
+}
+
+impl<'a> MapRequest<'a> {
+    /// A `width x height` map with the defaults.
+    pub fn new(width: usize, height: usize) -> MapRequest<'a> {
+        MapRequest {
+            width,
+            height,
+            view: View::default(),
+            samples: None,
+            rule: BlendRule::default(),
+            lattice: None,
+            progress: &NoProgress,
+        }
+    }
+
+    /// The latent window shown.
+    pub fn view(self, view: View) -> MapRequest<'a> {
+        MapRequest { view, ..self }
+    }
+
+    /// Samples a pixel (`None`: the atlas chooses).
+    pub fn samples(self, samples: Option<usize>) -> MapRequest<'a> {
+        MapRequest { samples, ..self }
+    }
+
+    /// The material at each pixel.
+    pub fn rule(self, rule: BlendRule) -> MapRequest<'a> {
+        MapRequest { rule, ..self }
+    }
+
+    /// A prepared map to draw with.
+    pub fn lattice(self, lattice: &'a AlbedoLattice) -> MapRequest<'a> {
+        MapRequest {
+            lattice: Some(lattice),
+            ..self
+        }
+    }
+
+    /// Told of the rows drawn, and asked whether to stop.
+    pub fn progress(self, progress: &'a dyn Progress) -> MapRequest<'a> {
+        MapRequest { progress, ..self }
+    }
+}
+
+impl Atlas {
     /// Per-material albedos in transformed space (rows of `A`) and the albedo
     /// of the mean, with `rule`; linear transforms only make this an albedo.
     pub fn material_albedos(&self, rule: &Quadrature) -> (Vec<[f64; 3]>, [f64; 3]) {
-        let store = self.store();
+        let store = self.model.store();
         let (n, bins) = (store.n(), store.dims().bins());
         let unmeasured = store.unmeasured();
         let mean = store.mean();
@@ -146,25 +228,19 @@ impl Model {
         (a, m)
     }
 
-    /// The dense albedo rule of the model's dims (2 sub-cells a bin), built once.
-    pub fn albedo_rule(&self) -> &Quadrature {
-        self.map_basis()
-            .rule
-            .get_or_init(|| Quadrature::dense(self.dims(), 2))
-    }
-
     /// The model's mean material as reflectance per bin (channels averaged,
     /// unmeasured bins 0): the shape the map's quadrature rule assumes
     /// within each box of bins ([`Quadrature::with_samples_shaped`]). Built once.
     pub fn shape(&self) -> &[f64] {
-        self.map_basis().shape.get_or_init(|| {
-            let store = self.store();
-            let bins = self.dims().bins();
+        self.shape.get_or_init(|| {
+            let store = self.model.store();
+            let bins = self.model.dims().bins();
             let (mean, unmeasured) = (store.mean(), store.unmeasured());
             let mut shape = vec![0.0f64; bins];
             let mut value = vec![0.0f64; bins];
             for c in 0..3 {
-                self.transform()
+                self.model
+                    .transform()
                     .inverse_run(0, &mean[c * bins..(c + 1) * bins], &mut value);
                 for ((s, v), &u) in shape.iter_mut().zip(&value).zip(&unmeasured[c * bins..]) {
                     if u == 0 {
@@ -177,13 +253,13 @@ impl Model {
     }
 
     /// The linear map's basis: `K^-1 A` per channel (`A` the per-material
-    /// albedos of [`Model::material_albedos`] with [`Model::albedo_rule`])
+    /// albedos of [`Atlas::material_albedos`] with [`Model::albedo_rule`])
     /// and the mean material's albedo. Built once.
     fn linear_basis(&self) -> &([Vec<f64>; 3], [f64; 3]) {
-        self.map_basis().linear.get_or_init(|| {
-            let (a, m) = self.material_albedos(self.albedo_rule());
+        self.linear.get_or_init(|| {
+            let (a, m) = self.material_albedos(self.model.albedo_rule());
             let n = a.len();
-            let b = self.llt_solve(&Mat::from_fn(n, 3, |i, c| a[i][c]));
+            let b = self.model.llt_solve(&Mat::from_fn(n, 3, |i, c| a[i][c]));
             (
                 std::array::from_fn(|c| (0..n).map(|i| b[(i, c)]).collect()),
                 m,
@@ -191,31 +267,45 @@ impl Model {
         })
     }
 
-    /// The albedo map of a `width x height` image of `view`, of the default
-    /// rule's material ([`BlendRule::default`], the soft floor): what
-    /// `reconstruct` writes at each pixel's point. `samples`: `None` uses
-    /// the albedo field ([`Model::albedo_field`]) where it fits its budget,
-    /// `Some(s)` integrates each pixel with an `s`-point rule. Once `progress` is
-    /// [cancelled](Progress::cancelled) (it must then stay so) the map stops
-    /// within a row or a field refinement step and returns
-    /// [`CoreError::Cancelled`].
-    pub fn albedo_map(
-        &self,
-        width: usize,
-        height: usize,
-        view: View,
-        samples: Option<usize>,
-        progress: &dyn Progress,
-    ) -> Result<AlbedoMap> {
-        self.albedo_map_with(width, height, view, samples, BlendRule::default(), progress)
+    /// The albedo map `request` asks for ([`MapRequest`]): a `width x
+    /// height` image of its view, of the material its rule forms at each
+    /// pixel, what `reconstruct` writes at each pixel's point.
+    ///
+    /// - With a prepared map ([`MapRequest::lattice`]; a lattice of another
+    ///   fit is refused) the pixels in its window come from its cubic and the
+    ///   rest are drawn as without it, of the lattice's material; the
+    ///   request's rule and samples are not read.
+    /// - Otherwise `samples` `None` uses the prepared map saved beside the
+    ///   model where it serves the view and rule ([`Atlas::prepared_map`]),
+    ///   else the albedo field ([`Atlas::field`]) where it fits its budget,
+    ///   else the per-pixel rule with [`DEFAULT_SAMPLES`]; the GP's blend
+    ///   of a linear transform uses the exact linear shortcut. `Some(s)`
+    ///   integrates each pixel with an `s`-point rule. The soft floor's
+    ///   material ([`BlendRule::Floor`]) is not linear in the weights, so
+    ///   even a raw-transform map of it takes the field or the per-pixel
+    ///   rule. The plausible rule has no map.
+    ///
+    /// Once the request's progress is [cancelled](Progress::cancelled) (it
+    /// must then stay so) the map stops within a row or a field refinement
+    /// step and returns [`CoreError::Cancelled`].
+    pub fn map(&self, request: MapRequest<'_>) -> Result<AlbedoMap> {
+        let MapRequest {
+            width,
+            height,
+            view,
+            samples,
+            rule,
+            lattice,
+            progress,
+        } = request;
+        match lattice {
+            Some(lattice) => self.map_prepared(lattice, width, height, view, progress),
+            None => self.draw(width, height, view, samples, rule, progress),
+        }
     }
 
-    /// [`Model::albedo_map`] of the material `rule` forms at each pixel: the
-    /// soft floor's ([`BlendRule::Floor`]; not linear in the weights, so even
-    /// a raw-transform map of it takes the field or the per-pixel rule) or
-    /// the GP's blend (`None` samples then uses the exact linear shortcut
-    /// for a linear transform). The plausible rule has no map.
-    pub fn albedo_map_with(
+    /// The map of `rule`'s material without a given lattice ([`Atlas::map`]).
+    pub(crate) fn draw(
         &self,
         width: usize,
         height: usize,
@@ -226,17 +316,17 @@ impl Model {
     ) -> Result<AlbedoMap> {
         self.check_map_request(width, height, view)?;
         let floor = floor_of(rule)?;
-        self.store().verify_cheap()?;
-        let n = self.latent().nrows();
+        self.model.store().verify_cheap()?;
+        let n = self.model.latent().nrows();
         let (ex, ey) = self.kernel_factors(width, height, view);
         let mut rgb = vec![[0.0f32; 3]; width * height];
         let mut variance = vec![0.0f32; width * height];
-        let inv = self.k_inverse();
+        let inv = self.model.k_inverse();
         let kernel_row = |py: usize| kernel_row(&ex, &ey, n, py);
         progress.start("map", height as u64);
-        let linear = self.file().transform.is_linear() && !floor;
+        let linear = self.model.file().transform.is_linear() && !floor;
         // A prepared map of this material draws the pixels in its window; a
-        // damaged or stale one is left aside (`Model::prepared_map` says why).
+        // damaged or stale one is left aside (`Atlas::prepared_map` says why).
         let lattice = match samples {
             None if !linear => self
                 .prepared_map()
@@ -253,7 +343,12 @@ impl Model {
         let field = match samples {
             None if !linear => {
                 let budget = self.field_budget(width * height, DEFAULT_SAMPLES);
-                self.albedo_field_of(view, budget, rule, progress)?
+                self.field(FieldRequest {
+                    view,
+                    budget,
+                    rule,
+                    progress,
+                })?
             }
             _ => None,
         };
@@ -346,12 +441,12 @@ impl Model {
                                     [view.pixel_to_latent(px as f64, 0.0, width, height)[0], y]
                                 })
                                 .collect();
-                            let convex = self.convex_weights_at(&xs);
+                            let convex = convex_weights_at(&self.model, &xs);
                             let vx: Vec<f64> = convex.concat();
                             let mut cbuf = vec![0.0f64; r * width];
                             matmul(&mut cbuf, cv, &vx, n);
                             // Each row's reach: its channel's at the pixel.
-                            let bound = self.store().energy_bound();
+                            let bound = self.model.store().energy_bound();
                             let mut reach = vec![0.0f64; r];
                             let columns = vbuf.chunks_exact_mut(r).zip(cbuf.chunks_exact(r));
                             for ((col, cvals), v) in columns.zip(&convex) {
@@ -408,7 +503,7 @@ impl Model {
         if progress.cancelled() {
             return Err(CoreError::Cancelled);
         }
-        self.verify()?;
+        self.model.verify()?;
         Ok(AlbedoMap {
             width,
             height,
@@ -437,7 +532,7 @@ pub(crate) struct PixelRule {
     cv: Vec<f64>,
     mean: Vec<f64>,
     /// The largest centred value of each rule row (the soft floor's cap,
-    /// [`crate::query::floor::floor_capped`]).
+    /// [`crate::model::blend::soft_floor::floor_capped`]).
     top: Vec<f64>,
 }
 
@@ -445,18 +540,19 @@ pub(crate) struct PixelRule {
 /// previews and full maps again and again pays for each rule once.
 const PIXEL_RULE_CACHE: usize = 4;
 
-impl Model {
+impl Atlas {
     /// The per-pixel rule with `samples` samples, from the model's cache or
     /// built (the shaped quadrature rule, its store rows and `C`) and kept.
     fn pixel_rule(&self, samples: usize) -> Arc<PixelRule> {
-        let cache = &self.map_basis().pixel_rules;
+        let cache = &self.pixel_rules;
         let same = |r: &PixelRule| r.samples == samples;
         if let Some(r) = cache.find(same) {
             return r;
         }
-        let n = self.latent().nrows();
-        let store = self.store();
-        let quadrature = Quadrature::with_samples_shaped(self.albedo_rule(), samples, self.shape());
+        let n = self.model.latent().nrows();
+        let store = self.model.store();
+        let quadrature =
+            Quadrature::with_samples_shaped(self.model.albedo_rule(), samples, self.shape());
         // The rows the rule reads (measured ones only), grouped by channel,
         // with the quadrature weight folded into the inverse's scale.
         let rows = self.rows_of(&quadrature);
@@ -470,7 +566,7 @@ impl Model {
         });
         // C^T = K^-1 Z_q^T, so that the values at x are mean + C k(x);
         // C column-major (r x n) for the product.
-        let ct = self.llt_solve(&zq);
+        let ct = self.model.llt_solve(&zq);
         let c: Vec<f64> = (0..n)
             .flat_map(|i| (0..r).map(move |j| (i, j)))
             .map(|(i, j)| ct[(i, j)])
@@ -498,15 +594,15 @@ impl Model {
     }
 }
 
-impl Model {
+impl Atlas {
     /// The separable RBF's factors of a `width x height` image of `view`:
     /// `k(x, y)_i = e^(-(x - x_i)^2 / 2l^2) e^(-(y - y_i)^2 / 2l^2)`, so one
     /// factor per pixel column and one per pixel row (N each, column- and
     /// row-major) give every pixel's `k(x)` with N multiplications and no
     /// exponential.
     fn kernel_factors(&self, width: usize, height: usize, view: View) -> (Vec<f64>, Vec<f64>) {
-        let kernel = self.file().kernel;
-        let latent = self.latent();
+        let kernel = self.model.file().kernel;
+        let latent = self.model.latent();
         let n = latent.nrows();
         let inv2l2 = 1.0 / (2.0 * kernel.length_scale * kernel.length_scale);
         let factors = |count: usize, axis: usize, centre: &dyn Fn(usize) -> f64| -> Vec<f64> {
@@ -532,10 +628,10 @@ impl Model {
     /// A map needs a 2-D model, a size within [`crate::limits::MAX_MAP_SIDE`]
     /// a side and a finite, non-empty view.
     pub(crate) fn check_map_request(&self, width: usize, height: usize, view: View) -> Result<()> {
-        if self.q() != 2 {
+        if self.model.q() != 2 {
             return Err(CoreError::BadQuery(format!(
                 "a map needs a 2-D latent space, this model has q = {}",
-                self.q()
+                self.model.q()
             )));
         }
         let max = crate::limits::MAX_MAP_SIDE;
@@ -552,9 +648,9 @@ impl Model {
     /// it, without the albedo: no pass over the store, O(N^2) a pixel.
     pub fn variance_map(&self, width: usize, height: usize, view: View) -> Result<Vec<f32>> {
         self.check_map_request(width, height, view)?;
-        let n = self.latent().nrows();
+        let n = self.model.latent().nrows();
         let (ex, ey) = self.kernel_factors(width, height, view);
-        let inv = self.k_inverse();
+        let inv = self.model.k_inverse();
         let mut variance = vec![0.0f32; width * height];
         variance
             .par_chunks_mut(width)
@@ -565,7 +661,7 @@ impl Model {
 }
 
 /// `k(x)` of every pixel of row `py`, one column a pixel, from the factors
-/// of [`Model::kernel_factors`].
+/// of [`Atlas::kernel_factors`].
 fn kernel_row(ex: &[f64], ey: &[f64], n: usize, py: usize) -> Vec<f64> {
     // Column-major n x width: one column a pixel.
     let mut kx = vec![0.0f64; ex.len()];

@@ -5,9 +5,9 @@
 use brdf_merl::Quadrature;
 
 use crate::error::Result;
+use crate::maps::albedo_map::AlbedoMap;
 use crate::model::Model;
-use crate::query::BlendRule;
-use crate::query::map::AlbedoMap;
+use crate::model::blend::BlendRule;
 
 /// Albedo of the reconstruction `blend` forms at `x`, integrated with
 /// `rule` over every bin it names (unmeasured bins count as 0, negative
@@ -19,7 +19,7 @@ pub fn reference_albedo(
     blend: BlendRule,
     rule: &Quadrature,
 ) -> Result<[f64; 3]> {
-    let blend = model.at_with(x, blend)?;
+    let blend = model.at(x, blend)?;
     let albedo = rule.integrate(|bin| [0, 1, 2].map(|c| blend.value(c, bin).unwrap_or(0.0)));
     model.verify()?;
     Ok(albedo)

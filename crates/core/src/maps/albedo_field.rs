@@ -12,7 +12,7 @@
 //! 2. computes the **exact** albedo — the dense rule
 //!    ([`Model::albedo_rule`]) over the full reconstruction — at the
 //!    nodes of a tensor Chebyshev–Lobatto grid on the domain, all nodes of a
-//!    grid in one pass over the store ([`Model::exact_albedos`]: one matrix
+//!    grid in one pass over the store ([`Atlas::exact_albedos`]: one matrix
 //!    product a block of rows, so the store is read once however many nodes);
 //! 3. refines the grid (5, 9, 17, 33 points a side; each grid holds the
 //!    previous one) until the interpolant of the coarser grid, compared with
@@ -36,10 +36,10 @@
 //! and swing; on the 100-material model a patch a quarter of the default
 //! view wide still misses the tolerance at 17 x 17 nodes) a field needs
 //! thousands of nodes. So a map gives its field a budget
-//! ([`Model::field_budget`]): as many nodes as cost what integrating every
+//! ([`Atlas::field_budget`]): as many nodes as cost what integrating every
 //! pixel with the default quadrature would; a field that would need more is
 //! abandoned and the map integrates every pixel. Before any exact node, the
-//! field is planned ([`Model::plan_field`]): the same refinement on node
+//! field is planned ([`Atlas::plan_field`]): the same refinement on node
 //! values from the per-pixel rule's few hundred rows, which have detail at
 //! about the same scale; a plan past four times the budget gives the field
 //! up at the cost of at most that many cheap nodes (a judgement, not a bound:
@@ -61,11 +61,12 @@ use std::sync::Arc;
 
 use crate::dense::product::matmul;
 use crate::error::{CoreError, Result};
-use crate::model::Model;
+use crate::maps::Atlas;
+use crate::maps::exact_albedos::RuleRows;
+use crate::maps::view::View;
+use crate::model::blend::pass_weights::floor_of;
+use crate::model::blend::plausibility::BlendRule;
 use crate::progress::{NoProgress, Progress};
-use crate::query::exact::{RuleRows, floor_of};
-use crate::query::plausibility::BlendRule;
-use crate::query::view::View;
 use crate::simd::dot;
 
 /// The largest error of the albedo interpolant allowed at a refinement's new
@@ -78,7 +79,7 @@ pub const VARIANCE_TOLERANCE: f64 = 2e-3;
 const LEVELS: [usize; 3] = [5, 9, 17];
 /// The variance's exact nodes are cheap (`O(N^2)` each): it may go finer.
 const VARIANCE_LEVELS: [usize; 6] = [5, 9, 17, 33, 65, 129];
-/// The smallest node budget of a map's field ([`Model::field_budget`]):
+/// The smallest node budget of a map's field ([`Atlas::field_budget`]):
 /// a 9 x 9 grid, enough for a view much smaller than the detail of its
 /// albedo.
 pub const MIN_NODES: usize = 81;
@@ -87,7 +88,7 @@ pub const MAX_DEPTH: usize = 4;
 /// A patch whose estimate is this many tolerances or more after a
 /// refinement is cut in four rather than refined further.
 pub const CUT_RATIO: f64 = 30.0;
-/// How many times its budget a field's plan ([`Model::plan_field`]) may
+/// How many times its budget a field's plan ([`Atlas::plan_field`]) may
 /// take in nodes before the field is given up without exact nodes. The
 /// plan's values come from a coarser rule, whose albedo has more detail
 /// than the exact one's (on a 12-material synthetic model, a plan of 613
@@ -163,12 +164,57 @@ impl AlbedoField {
     }
 }
 
-impl Model {
+/// What [`Atlas::field`] builds: the field of a view's domain within a
+/// node budget, of the default rule's material ([`BlendRule::default`])
+/// unless set, without progress reports unless given.
+///
+/// ```
+/// use brdf_atlas_core::{BlendRule, FieldRequest, View};
+///
+/// let request = FieldRequest::new(View::default(), 4000).rule(BlendRule::Gp);
+/// # let _ = request;
+/// ```
+#[derive(Clone, Copy)]
+pub struct FieldRequest<'a> {
+    /// The view whose domain ([`domain_of`]) the field covers.
+    pub view: View,
+    /// The most exact nodes the field may take.
+    pub budget: usize,
+    /// The material: the GP's blend or the soft floor's.
+    pub rule: BlendRule,
+    /// Told of the refinement, and asked whether to stop.
+    pub progress: &'a dyn Progress,
+}
+
+impl<'a> FieldRequest<'a> {
+    /// The field of `view`'s domain within `budget` nodes, of the default
+    /// rule's material.
+    pub fn new(view: View, budget: usize) -> FieldRequest<'a> {
+        FieldRequest {
+            view,
+            budget,
+            rule: BlendRule::default(),
+            progress: &NoProgress,
+        }
+    }
+
+    /// The material.
+    pub fn rule(self, rule: BlendRule) -> FieldRequest<'a> {
+        FieldRequest { rule, ..self }
+    }
+
+    /// Told of the refinement, and asked whether to stop.
+    pub fn progress(self, progress: &'a dyn Progress) -> FieldRequest<'a> {
+        FieldRequest { progress, ..self }
+    }
+}
+
+impl Atlas {
     /// The exact predictive variance `1 - k^T K^-1 k` at each point.
     fn exact_variances(&self, points: &[[f64; 2]]) -> Vec<f64> {
-        let (latent, kernel) = (self.latent(), self.file().kernel);
+        let (latent, kernel) = (self.model.latent(), self.model.file().kernel);
         let n = latent.nrows();
-        let inv = self.k_inverse();
+        let inv = self.model.k_inverse();
         let mut out = vec![0.0f32; points.len()];
         for (chunk, o) in points.chunks(256).zip(out.chunks_mut(256)) {
             let kx: Vec<f64> = chunk
@@ -183,40 +229,25 @@ impl Model {
         out.into_iter().map(f64::from).collect()
     }
 
-    /// The field of `view`'s domain ([`domain_of`]) for the default rule's
-    /// material ([`BlendRule::default`]), from the model's cache or built
-    /// and kept; `None` when its albedo needs more than `budget`
-    /// exact nodes (the map then integrates every pixel instead). A domain
-    /// that failed is tried again only with a larger budget.
-    pub fn albedo_field(&self, view: View, budget: usize) -> Result<Option<Arc<AlbedoField>>> {
-        self.albedo_field_with(view, budget, &NoProgress)
-    }
-
-    /// [`Model::albedo_field`], stopped between refinement steps with
-    /// [`CoreError::Cancelled`] (nothing cached) once `progress` is
-    /// [cancelled](Progress::cancelled).
-    pub fn albedo_field_with(
-        &self,
-        view: View,
-        budget: usize,
-        progress: &dyn Progress,
-    ) -> Result<Option<Arc<AlbedoField>>> {
-        self.albedo_field_of(view, budget, BlendRule::default(), progress)
-    }
-
-    /// [`Model::albedo_field_with`] of the material `rule` forms: the GP's
-    /// blend or the soft floor's (the plausible rule has no map).
-    pub fn albedo_field_of(
-        &self,
-        view: View,
-        budget: usize,
-        rule: BlendRule,
-        progress: &dyn Progress,
-    ) -> Result<Option<Arc<AlbedoField>>> {
+    /// The field of `request.view`'s domain ([`domain_of`]) for the
+    /// material `request.rule` forms (the GP's blend or the soft floor's;
+    /// the plausible rule has no map), from the atlas's cache or built and
+    /// kept; `None` when its albedo needs more than `request.budget` exact
+    /// nodes (the map then integrates every pixel instead). A domain that
+    /// failed is tried again only with a larger budget. Stopped between
+    /// refinement steps with [`CoreError::Cancelled`] (nothing cached) once
+    /// `request.progress` is [cancelled](Progress::cancelled).
+    pub fn field(&self, request: FieldRequest<'_>) -> Result<Option<Arc<AlbedoField>>> {
+        let FieldRequest {
+            view,
+            budget,
+            rule,
+            progress,
+        } = request;
         view.check()?;
         let floor = floor_of(rule)?;
         let domain = domain_of(view);
-        let cache = &self.map_basis().fields;
+        let cache = &self.fields;
         let cached = |f: &Cached| {
             f.domain == domain && f.floor == floor && (f.field.is_some() || f.budget >= budget)
         };
@@ -253,7 +284,7 @@ impl Model {
     }
 
     /// Plan the field of `domain`: the same refinement as
-    /// [`Model::build_field`], with node values from the map's per-pixel rule
+    /// [`Atlas::build_field`], with node values from the map's per-pixel rule
     /// ([`DEFAULT_SAMPLES`](crate::DEFAULT_SAMPLES) samples: about 800 rows
     /// against 3.3 million, and like the exact albedo a sum of smooth
     /// functions of the point, so with detail at about the same scale). The
@@ -348,7 +379,7 @@ impl Model {
 
 /// A domain's field, or that it has none within `budget` nodes, as the
 /// model keeps it.
-struct Cached {
+pub(crate) struct Cached {
     domain: View,
     /// Every value on its soft floor ([`BlendRule::Floor`]).
     floor: bool,

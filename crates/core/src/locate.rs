@@ -20,8 +20,8 @@ use brdf_merl::MerlFile;
 use crate::error::{CoreError, Result};
 use crate::gplvm::kernel::rows_of;
 use crate::gplvm::optim::BOX;
+use crate::maps::albedo_map::View;
 use crate::model::Model;
-use crate::query::map::View;
 use crate::simd::fold::ordered_blocks;
 
 /// How many length scales beyond the inputs the search reaches: there the
@@ -54,10 +54,10 @@ impl Located {
     }
 }
 
-impl Model {
-    /// Find the latent point whose reconstruction best matches `file`.
-    pub fn locate(&self, file: &MerlFile) -> Result<Located> {
-        let dims = self.dims();
+impl Located {
+    /// Find the latent point of `model` whose reconstruction best matches `file`.
+    pub fn find(model: &Model, file: &MerlFile) -> Result<Located> {
+        let dims = model.dims();
         if file.dims() != dims {
             return Err(CoreError::BadQuery(format!(
                 "{}: dims {}, the model's materials are {dims}",
@@ -65,7 +65,7 @@ impl Model {
                 file.dims()
             )));
         }
-        let store = self.store();
+        let store = model.store();
         store.verify_cheap()?;
         let (n, bins, rows) = (store.n(), dims.bins(), store.rows());
         let mean = store.mean();
@@ -81,7 +81,7 @@ impl Model {
                 let mut raw = vec![0.0; range.len()];
                 file.copy_raw(r0, &mut raw);
                 let mut t = vec![0.0; range.len()];
-                self.transform().forward_raw_rows(bins, r0, &raw, &mut t);
+                model.transform().forward_raw_rows(bins, r0, &raw, &mut t);
                 let mut zrow = vec![0.0; n];
                 for (j, tv) in t.iter().enumerate() {
                     let z = tv - mean[r0 + j];
@@ -99,9 +99,9 @@ impl Model {
             b.iter_mut().zip(pb).for_each(|(x, y)| *x += y);
             s += ps;
         }
-        let y = self.gram();
+        let y = model.gram();
         let error = |x: &[f64]| -> f64 {
-            let Ok(w) = self.weights_at(x) else {
+            let Ok(w) = model.weights_at(x) else {
                 return f64::INFINITY;
             };
             let wb: f64 = w.iter().zip(&b).map(|(a, c)| a * c).sum();
@@ -115,10 +115,10 @@ impl Model {
             }
             s - 2.0 * wb + wyw
         };
-        let q = self.q();
-        let latent = self.latent();
+        let q = model.q();
+        let latent = model.latent();
         // The inputs' bounding box (the fit's box at least), widened by REACH length scales.
-        let reach = REACH * self.file().kernel.length_scale;
+        let reach = REACH * model.file().kernel.length_scale;
         let bounds: Vec<(f64, f64)> = (0..q)
             .map(|c| {
                 let (lo, hi) = (0..n).fold((BOX.0, BOX.1), |(lo, hi), i| {
@@ -172,7 +172,7 @@ impl Model {
             .collect();
         nearest.sort_by(|a, b| a.1.total_cmp(&b.1));
         file.verify()?;
-        self.verify()?;
+        model.verify()?;
         Ok(Located {
             point,
             rmse: (best.0.max(0.0) / d).sqrt(),

@@ -1,19 +1,19 @@
 //! Exact albedos at latent points: the dense rule (or another rule's rows)
 //! over the full reconstruction, all the points in one pass over the store.
 //!
-//! The albedo field ([`crate::query::field`]) takes its nodes from here,
+//! The albedo field ([`crate::maps::albedo_field`]) takes its nodes from here,
 //! and plans its refinement on the rows of the map's per-pixel rule, a few
 //! hundred instead of millions, before paying for exact nodes.
 
 use brdf_merl::Quadrature;
-use faer::Mat;
 
 use crate::data::transform::InverseForm;
 use crate::dense::product::matmul;
 use crate::error::{CoreError, Result};
-use crate::model::Model;
-use crate::query::floor::{floor_points, top_of};
-use crate::query::plausibility::BlendRule;
+use crate::maps::Atlas;
+use crate::model::blend::pass_weights::{PassWeights, floor_of, pass_weights};
+use crate::model::blend::plausibility::BlendRule;
+use crate::model::blend::soft_floor::{floor_points, top_of};
 use crate::simd::fastexp;
 use crate::simd::fold::{GROUPS, ordered_blocks};
 
@@ -45,15 +45,65 @@ pub(crate) struct RuleRows {
     pub(crate) exponential: bool,
 }
 
-impl Model {
+/// What [`Atlas::exact_albedos`] integrates: the material of a rule
+/// ([`BlendRule::default`] unless set), with the rows of a quadrature rule
+/// ([`Integration::Dense`] unless set).
+///
+/// ```
+/// use brdf_atlas_core::{AlbedoRequest, BlendRule, Integration};
+///
+/// let request = AlbedoRequest::new().rule(BlendRule::Gp).integration(Integration::Nodes);
+/// # let _ = request;
+/// ```
+#[derive(Debug, Clone, Copy, Default)]
+pub struct AlbedoRequest<'a> {
+    /// The material at each point: the GP's blend or the soft floor's.
+    pub rule: BlendRule,
+    /// The quadrature rule the albedo is integrated with.
+    pub integration: Integration<'a>,
+}
+
+impl<'a> AlbedoRequest<'a> {
+    /// The default request: the default rule's material, the dense rule.
+    pub fn new() -> AlbedoRequest<'a> {
+        AlbedoRequest::default()
+    }
+
+    /// The material at each point.
+    pub fn rule(self, rule: BlendRule) -> AlbedoRequest<'a> {
+        AlbedoRequest { rule, ..self }
+    }
+
+    /// The quadrature rule the albedo is integrated with.
+    pub fn integration(self, integration: Integration<'a>) -> AlbedoRequest<'a> {
+        AlbedoRequest {
+            integration,
+            ..self
+        }
+    }
+}
+
+/// The quadrature rule exact albedos are integrated with.
+#[derive(Debug, Clone, Copy, Default)]
+pub enum Integration<'a> {
+    /// The dense rule ([`Model::albedo_rule`](crate::Model::albedo_rule)).
+    #[default]
+    Dense,
+    /// The rule of the map's nodes ([`NODE_PHI_D_STEP`]): what albedo
+    /// fields and prepared lattices take at their nodes, at an eighth of
+    /// the dense rule's cost at the MERL resolution.
+    Nodes,
+    /// Another quadrature rule of the model's dims: what
+    /// [`reference_albedo`](crate::map_error::reference_albedo) gives point
+    /// by point, for all the points in one pass over the rule's rows.
+    Rule(&'a Quadrature),
+}
+
+impl Atlas {
     /// The rows of the dense rule, built once.
     pub(crate) fn rule_rows(&self) -> &RuleRows {
-        let rows = self
-            .map_basis()
-            .rule_rows
-            .get_or_init(|| Box::new(self.rows_of(self.albedo_rule())));
-        rows.downcast_ref()
-            .expect("the model's rule rows are RuleRows")
+        self.rule_rows
+            .get_or_init(|| self.rows_of(self.model.albedo_rule()))
     }
 
     /// The rows of the rule the map's exact nodes (albedo fields, prepared
@@ -62,34 +112,33 @@ impl Model {
     /// (an eighth of the rows at the MERL resolution, within 0.05% of the
     /// dense rule), the dense rule itself on coarser grids; built once.
     pub(crate) fn node_rows(&self) -> &RuleRows {
-        let rows = self.map_basis().node_rows.get_or_init(|| {
-            let step = if self.dims().phi_d >= 90 {
+        self.node_rows.get_or_init(|| {
+            let step = if self.model.dims().phi_d >= 90 {
                 NODE_PHI_D_STEP
             } else {
                 1
             };
-            Box::new(self.rows_of(&self.albedo_rule().every_phi_d(step)))
-        });
-        rows.downcast_ref()
-            .expect("the model's node rows are RuleRows")
+            self.rows_of(&self.model.albedo_rule().every_phi_d(step))
+        })
     }
 
     /// The rows of the map's per-pixel rule (the default sample count), with
     /// which a field is planned before its exact nodes are paid for; built once.
     pub(crate) fn plan_rows(&self) -> &RuleRows {
-        let rows = self.map_basis().plan_rows.get_or_init(|| {
-            let rule =
-                Quadrature::with_samples_shaped(self.albedo_rule(), DEFAULT_SAMPLES, self.shape());
-            Box::new(self.rows_of(&rule))
-        });
-        rows.downcast_ref()
-            .expect("the model's plan rows are RuleRows")
+        self.plan_rows.get_or_init(|| {
+            let rule = Quadrature::with_samples_shaped(
+                self.model.albedo_rule(),
+                DEFAULT_SAMPLES,
+                self.shape(),
+            );
+            self.rows_of(&rule)
+        })
     }
 
     /// The store rows `rule` reads (measured ones only, channel-major), with
     /// the rule's weight times the inverse transform's scale.
     pub(crate) fn rows_of(&self, rule: &Quadrature) -> RuleRows {
-        let store = self.store();
+        let store = self.model.store();
         let bins = store.dims().bins();
         let mut out = RuleRows {
             rows: Vec::new(),
@@ -103,7 +152,7 @@ impl Model {
                 if store.unmeasured()[row] != 0 {
                     continue;
                 }
-                let scale = match self.transform().inverse_form(b as usize) {
+                let scale = match self.model.transform().inverse_form(b as usize) {
                     InverseForm::Linear(s) => s,
                     InverseForm::Exp(s) => {
                         out.exponential = true;
@@ -118,60 +167,40 @@ impl Model {
         out
     }
 
-    /// The albedo of the full reconstruction of the default rule
-    /// ([`BlendRule::default`]) at each point, integrated with the dense
-    /// rule ([`Model::albedo_rule`]; negative reconstructed values count as
-    /// 0, unmeasured bins are left out). One pass over the store for all
-    /// points: each block of rows is one product with the points' weights
-    /// `K^-1 k(x)`. The sums are formed in a fixed order: the answer does
-    /// not depend on the thread count.
-    pub fn exact_albedos(&self, points: &[[f64; 2]]) -> Result<Vec<[f64; 3]>> {
-        self.exact_albedos_with(points, BlendRule::default())
-    }
-
-    /// [`Model::exact_albedos`] of the material `rule` forms at each point:
-    /// the GP's blend or the soft floor's ([`BlendRule::Floor`]: a second
-    /// product of each block, with the points' convex weights). The
-    /// plausible rule's steps need a pass of their own per point
-    /// ([`Model::plausible_blends`]), so it is refused here.
-    pub fn exact_albedos_with(
+    /// The albedo of the full reconstruction of the material
+    /// `request.rule` forms at each point (the GP's blend or the soft
+    /// floor's: a second product of each block, with the points' convex
+    /// weights; the plausible rule's steps need a pass of their own per
+    /// point, [`Atlas::plausible_blends`], so it is refused here),
+    /// integrated as `request.integration` says ([`Integration`];
+    /// negative reconstructed values count as 0, unmeasured bins are left
+    /// out). One pass over the store for all points: each block of rows is
+    /// one product with the points' weights `K^-1 k(x)`. The sums are
+    /// formed in a fixed order: the answer does not depend on the thread
+    /// count. [`CoreError::BadQuery`] for a quadrature rule of other dims.
+    pub fn exact_albedos(
         &self,
         points: &[[f64; 2]],
-        rule: BlendRule,
+        request: AlbedoRequest<'_>,
     ) -> Result<Vec<[f64; 3]>> {
-        self.albedos_over(self.rule_rows(), points, floor_of(rule)?)
-    }
-
-    /// [`Model::exact_albedos_with`] integrated with the rule of the map's
-    /// nodes ([`NODE_PHI_D_STEP`]): what albedo fields and prepared
-    /// lattices take at their nodes, at an eighth of the dense rule's cost
-    /// at the MERL resolution.
-    pub fn node_albedos_with(&self, points: &[[f64; 2]], rule: BlendRule) -> Result<Vec<[f64; 3]>> {
-        self.albedos_over(self.node_rows(), points, floor_of(rule)?)
-    }
-
-    /// [`Model::exact_albedos_with`] integrated with another quadrature
-    /// rule of the model's dims: what
-    /// [`reference_albedo`](crate::measure::reference_albedo) gives point
-    /// by point, for all the points in one pass over the rule's rows.
-    /// [`CoreError::BadQuery`] if the rule is for other dims.
-    pub fn exact_albedos_by(
-        &self,
-        points: &[[f64; 2]],
-        blend: BlendRule,
-        rule: &Quadrature,
-    ) -> Result<Vec<[f64; 3]>> {
-        if rule.dims() != self.dims() {
-            return Err(CoreError::BadQuery(format!(
-                "a quadrature rule for {} on a model of {}",
-                rule.dims(),
-                self.dims()
-            )));
+        let floor = floor_of(request.rule)?;
+        match request.integration {
+            Integration::Dense => self.albedos_over(self.rule_rows(), points, floor),
+            Integration::Nodes => self.albedos_over(self.node_rows(), points, floor),
+            Integration::Rule(rule) => {
+                if rule.dims() != self.model.dims() {
+                    return Err(CoreError::BadQuery(format!(
+                        "a quadrature rule for {} on a model of {}",
+                        rule.dims(),
+                        self.model.dims()
+                    )));
+                }
+                self.albedos_over(&self.rows_of(rule), points, floor)
+            }
         }
-        self.albedos_over(&self.rows_of(rule), points, floor_of(blend)?)
     }
 
-    /// [`Model::exact_albedos`] with the rows of another rule, and with
+    /// [`Atlas::exact_albedos`] with the rows of another rule, and with
     /// every value on its soft floor if `floor`.
     pub(crate) fn albedos_over(
         &self,
@@ -179,18 +208,18 @@ impl Model {
         points: &[[f64; 2]],
         floor: bool,
     ) -> Result<Vec<[f64; 3]>> {
-        self.store().verify_cheap()?;
+        self.model.store().verify_cheap()?;
         let m = points.len();
         if m == 0 {
             return Ok(Vec::new());
         }
-        let n = self.latent().nrows();
+        let n = self.model.latent().nrows();
         let PassWeights {
             gp: a,
             convex: av,
             reach,
-        } = self.pass_weights(points, floor)?;
-        let store = self.store();
+        } = pass_weights(&self.model, points, floor)?;
+        let store = self.model.store();
         let mean = store.mean();
         // Products in f64 through the library's own kernel (faer's would
         // reserve twice the reported L3 cache in each thread).
@@ -245,60 +274,12 @@ impl Model {
                 }
             }
         }
-        self.verify()?;
+        self.model.verify()?;
         Ok(out)
     }
 }
 
-impl Model {
-    /// The weights of a pass over the store at `points` ([`PassWeights`]).
-    pub(crate) fn pass_weights(&self, points: &[[f64; 2]], floor: bool) -> Result<PassWeights> {
-        for p in points {
-            self.kernel_and_weights_at(p)?;
-        }
-        let (latent, kernel) = (self.latent(), self.file().kernel);
-        let (n, m) = (latent.nrows(), points.len());
-        let kx = Mat::from_fn(n, m, |i, j| {
-            kernel.eval(&[latent[(i, 0)], latent[(i, 1)]], &points[j])
-        });
-        let w = self.llt_solve(&kx);
-        let a: Vec<f64> = (0..n)
-            .flat_map(|t| (0..m).map(move |j| (t, j)))
-            .map(|(t, j)| w[(t, j)])
-            .collect();
-        let mut out = PassWeights {
-            gp: a,
-            convex: Vec::new(),
-            reach: Default::default(),
-        };
-        if floor {
-            let v = self.convex_weights_at(points);
-            out.convex = (0..n)
-                .flat_map(|t| (0..m).map(move |j| (t, j)))
-                .map(|(t, j)| v[j][t])
-                .collect();
-            let bound = self.store().energy_bound();
-            let reach: Vec<[f64; 3]> = v.iter().map(|v| bound.reach(v)).collect();
-            out.reach = [0, 1, 2].map(|c| reach.iter().map(|r| r[c]).collect());
-        }
-        Ok(out)
-    }
-}
-
-/// The weights of a pass over the store at `m` points.
-pub(crate) struct PassWeights {
-    /// The GP's `K^-1 k(x)` of every point laid out `n x m` row-major
-    /// (material `t`, point `j` at `t m + j`), so that a block of store rows
-    /// `Z_block` (`len x n`) gives the points' values as one product.
-    pub(crate) gp: Vec<f64>,
-    /// Under the floor, the convex weights laid out alike (else empty).
-    pub(crate) convex: Vec<f64>,
-    /// Under the floor, each channel's reach at every point
-    /// ([`crate::query::floor::reach_cap`]; else empty).
-    pub(crate) reach: [Vec<f64>; 3],
-}
-
-/// A worker's buffers for [`Model::exact_albedos`]: a block of rows and
+/// A worker's buffers for [`Atlas::exact_albedos`]: a block of rows and
 /// its values at the nodes (kept between calls, so a pass allocates nothing).
 #[derive(Default)]
 struct Scratch {
@@ -309,19 +290,4 @@ struct Scratch {
 
 thread_local! {
     static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch::default());
-}
-
-/// Whether the map and the exact pass put every value of `rule`'s material on
-/// its soft floor; the plausible rule's steps are not a function of the
-/// point's weights, so no map draws them.
-pub(crate) fn floor_of(rule: BlendRule) -> Result<bool> {
-    match rule {
-        BlendRule::Gp => Ok(false),
-        BlendRule::Floor => Ok(true),
-        BlendRule::Plausible => Err(CoreError::BadQuery(
-            "the plausible rule's albedo has no map (its steps need a pass over the store per \
-             point): use the gp or floor rule"
-                .into(),
-        )),
-    }
 }

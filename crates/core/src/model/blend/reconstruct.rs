@@ -31,7 +31,7 @@ use rayon::prelude::*;
 use crate::data::store::Rows;
 use crate::error::Result;
 use crate::model::Model;
-use crate::query::floor::{caps, floor_capped, floor_values, reach_cap};
+use crate::model::blend::soft_floor::{caps, floor_capped, floor_values, reach_cap};
 use crate::simd::dot;
 
 /// One latent point of a model, ready to answer queries.
@@ -44,13 +44,13 @@ pub struct Blend<'m> {
     gp: Vec<f64>,
     /// The weights the blend uses: `gp`, or those it was made with.
     weights: Vec<f64>,
-    /// Weights per `theta_h` bin, where a [`crate::query::BlendRule`] moved them.
+    /// Weights per `theta_h` bin, where a [`crate::model::blend::BlendRule`] moved them.
     bands: Option<Box<Bands>>,
-    /// The convex weights `v`, where [`crate::query::BlendRule::Floor`]
-    /// lifts every value onto its soft floor ([`crate::query::floor`]).
+    /// The convex weights `v`, where [`crate::model::blend::BlendRule::Floor`]
+    /// lifts every value onto its soft floor ([`crate::model::blend::soft_floor`]).
     floor: Option<Box<[f64]>>,
     /// Under the floor, how far each channel's cap reaches from the convex
-    /// blend towards the brightest material ([`crate::query::floor::reach_cap`]).
+    /// blend towards the brightest material ([`crate::model::blend::soft_floor::reach_cap`]).
     reach: [f64; 3],
     /// `value(channel, bin)` of every row asked so far (see [`Memo`]).
     memo: OnceLock<Box<[AtomicU64]>>,
@@ -142,15 +142,15 @@ impl Memo {
 /// split does not depend on the thread count; results never do).
 pub(crate) const TABLE_CHUNK: usize = 4096;
 
-impl Model {
-    /// The blend at latent point `x` (`q` finite coordinates).
+impl<'m> Blend<'m> {
+    /// The GP's blend at latent point `x` (`q` finite coordinates).
     /// [`CoreError::FileChanged`](crate::CoreError::FileChanged) once the
     /// store is known to have changed (a model refuses every query then).
-    pub fn at(&self, x: &[f64]) -> Result<Blend<'_>> {
-        self.store().verify_cheap()?;
-        let (kernel, weights) = self.kernel_and_weights_at(x)?;
+    pub(crate) fn gp_at(model: &'m Model, x: &[f64]) -> Result<Blend<'m>> {
+        model.store().verify_cheap()?;
+        let (kernel, weights) = model.kernel_and_weights_at(x)?;
         Ok(Blend {
-            model: self,
+            model,
             x: x.to_vec(),
             kernel,
             gp: weights.clone(),
@@ -163,9 +163,9 @@ impl Model {
     }
 
     /// A blend of the stored rows with any weights (no latent point).
-    pub(crate) fn at_weights(&self, weights: &[f64]) -> Blend<'_> {
+    pub(crate) fn of_weights(model: &'m Model, weights: &[f64]) -> Blend<'m> {
         Blend {
-            model: self,
+            model,
             x: Vec::new(),
             kernel: Vec::new(),
             gp: weights.to_vec(),
@@ -185,7 +185,7 @@ impl<'m> Blend<'m> {
     }
 
     /// The blend weights, one per input material: the GP's `K^-1 k(x)`.
-    /// Where a [`crate::query::BlendRule`] moved them, the weights differ
+    /// Where a [`crate::model::blend::BlendRule`] moved them, the weights differ
     /// from one `theta_h` bin to the next: see [`Blend::weights_in`].
     pub fn weights(&self) -> &[f64] {
         &self.weights
@@ -200,7 +200,7 @@ impl<'m> Blend<'m> {
         }
     }
 
-    /// Where a [`crate::query::BlendRule`] moved the weights: the convex
+    /// Where a [`crate::model::blend::BlendRule`] moved the weights: the convex
     /// weights `v` and the step `t_b` of each `theta_h` bin (the weights in
     /// bin `b` are `w + t_b (v - w)`). `None` for the GP's own blend.
     pub fn steps(&self) -> Option<(&[f64], &[f64])> {
@@ -262,22 +262,22 @@ impl<'m> Blend<'m> {
         }
     }
 
-    /// Where [`crate::query::BlendRule::Floor`] formed the blend: the convex
+    /// Where [`crate::model::blend::BlendRule::Floor`] formed the blend: the convex
     /// weights `v` whose blend sets each value's floor.
     pub fn floor(&self) -> Option<&[f64]> {
         self.floor.as_deref()
     }
 
-    /// Under [`crate::query::BlendRule::Floor`], how far each channel's cap
+    /// Under [`crate::model::blend::BlendRule::Floor`], how far each channel's cap
     /// reaches from the convex blend towards the brightest material (1:
-    /// all the way; [`crate::query::floor::reach_cap`]); 1 under the other
+    /// all the way; [`crate::model::blend::soft_floor::reach_cap`]); 1 under the other
     /// rules, which have no cap.
     pub fn reach(&self) -> [f64; 3] {
         self.reach
     }
 
     /// The reconstruction of store row `row` in transformed space, `mean + w . z`
-    /// (lifted onto its soft floor under [`crate::query::BlendRule::Floor`]).
+    /// (lifted onto its soft floor under [`crate::model::blend::BlendRule::Floor`]).
     #[inline]
     pub fn transformed(&self, row: usize) -> f64 {
         let store = self.model.store();
@@ -515,7 +515,7 @@ impl<'m> Blend<'m> {
 fn row_top(store: &crate::data::Store, row: usize) -> f64 {
     let n = store.n();
     match store.z() {
-        Rows::F32(z) => crate::query::floor::top_of(&z[row * n..(row + 1) * n]),
-        Rows::F64(z) => crate::query::floor::top_of(&z[row * n..(row + 1) * n]),
+        Rows::F32(z) => crate::model::blend::soft_floor::top_of(&z[row * n..(row + 1) * n]),
+        Rows::F64(z) => crate::model::blend::soft_floor::top_of(&z[row * n..(row + 1) * n]),
     }
 }

@@ -11,6 +11,7 @@
 
 use crate::data::store::Store;
 use crate::data::transform::{InverseForm, Transform};
+use crate::model::Model;
 use crate::simd::fastexp;
 
 /// The steps tried, smallest first: the rule takes the first that meets the budget.
@@ -130,18 +131,16 @@ pub(crate) fn convex_weights(
 /// between distinct materials, far above rounding.
 pub(crate) const SAME_POINT: f64 = 1e-9;
 
-impl crate::model::Model {
-    /// The convex weights ([`convex_weights`]) at each of `points`, with the
-    /// model's latent points and length scale: what the plausible rule steps
-    /// towards and the soft floor lies under.
-    pub(crate) fn convex_weights_at<P: AsRef<[f64]>>(&self, points: &[P]) -> Vec<Vec<f64>> {
-        let latent = crate::gplvm::kernel::rows_of(self.latent().as_ref());
-        let l = self.file().kernel.length_scale;
-        points
-            .iter()
-            .map(|x| convex_weights(&latent, x.as_ref(), l, None))
-            .collect()
-    }
+/// The convex weights ([`convex_weights`]) at each of `points`, with the
+/// model's latent points and length scale: what the plausible rule steps
+/// towards and the soft floor lies under.
+pub(crate) fn convex_weights_at<P: AsRef<[f64]>>(model: &Model, points: &[P]) -> Vec<Vec<f64>> {
+    let latent = crate::gplvm::kernel::rows_of(model.latent().as_ref());
+    let l = model.file().kernel.length_scale;
+    points
+        .iter()
+        .map(|x| convex_weights(&latent, x.as_ref(), l, None))
+        .collect()
 }
 
 /// The share of a blend's cosine-weighted reflectance that the clamp may

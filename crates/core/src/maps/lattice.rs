@@ -1,5 +1,5 @@
 //! The prepared map: exact albedos of the whole default view on an adaptive
-//! lattice, built once ([`Model::prepare_map`], `brdf-atlas prepare`) and
+//! lattice, built once ([`Atlas::prepare_map`], `brdf-atlas prepare`) and
 //! kept beside the model, so that every later map inside that view is
 //! drawn from it in a fraction of a second.
 //!
@@ -10,7 +10,7 @@
 //! quadrature"); but the detail covers little of the view. The lattice
 //! starts from cells a sixteenth of the view wide and, cell by cell,
 //! compares the tensor cubic of its lattice with exact albedos (the dense
-//! rule over the full reconstruction, [`Model::exact_albedos_with`]) at the
+//! rule over the full reconstruction, [`Atlas::exact_albedos`]) at the
 //! next finer lattice's new nodes in the cell. A cell within the tolerance
 //! of each node's largest channel is drawn from the finer lattice (whose
 //! error is well below the estimate); one that misses is cut in four, down
@@ -35,10 +35,10 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result};
-use crate::model::Model;
+use crate::maps::Atlas;
+use crate::maps::view::View;
+use crate::model::blend::plausibility::BlendRule;
 use crate::progress::Progress;
-use crate::query::plausibility::BlendRule;
-use crate::query::view::View;
 
 /// The largest error of a cell's cubic allowed at the finer lattice's new
 /// nodes, relative to the node's largest channel: 0.5%.
@@ -173,7 +173,7 @@ impl AlbedoLattice {
 
     /// The predictive variance at `x`, from the finest lattice's exact
     /// variances (computed with `model` on first use).
-    fn variance_at(&self, model: &Model, x: [f64; 2]) -> Result<f64> {
+    fn variance_at(&self, atlas: &Atlas, x: [f64; 2]) -> Result<f64> {
         let n = 1usize << FINEST;
         let grid = match self.variance.get() {
             Some(g) => g,
@@ -191,7 +191,7 @@ impl AlbedoLattice {
                     y0: v.y0 - hy,
                     y1: v.y1 + hy,
                 };
-                let rows = model.variance_map(n + 1, n + 1, wide)?;
+                let rows = atlas.variance_map(n + 1, n + 1, wide)?;
                 // Image rows run from the top: turn them to rows from the bottom.
                 let grid: Vec<f64> = (0..=n)
                     .flat_map(|i| rows[(n - i) * (n + 1)..(n - i + 1) * (n + 1)].iter())
@@ -236,13 +236,13 @@ impl AlbedoLattice {
     /// whole image's, row 0 at the top).
     pub(super) fn draw_block(
         &self,
-        model: &Model,
+        atlas: &Atlas,
         (width, height, view): (usize, usize, View),
         (cols, rows): (Range<usize>, Range<usize>),
         (rgb, variance): (&mut [[f32; 3]], &mut [f32]),
         progress: &dyn Progress,
     ) -> Result<()> {
-        self.variance_at(model, [self.view.x0, self.view.y0])?;
+        self.variance_at(atlas, [self.view.x0, self.view.y0])?;
         rgb.par_chunks_mut(width)
             .zip(variance.par_chunks_mut(width))
             .enumerate()
@@ -254,7 +254,7 @@ impl AlbedoLattice {
                 for px in cols.clone() {
                     let x = view.pixel_to_latent(px as f64, py as f64, width, height);
                     row[px] = self.albedo_at(x).map(|a| a.max(0.0) as f32);
-                    var[px] = self.variance_at(model, x)? as f32;
+                    var[px] = self.variance_at(atlas, x)? as f32;
                 }
                 progress.advance(1);
                 Ok::<(), CoreError>(())
@@ -286,7 +286,7 @@ impl AlbedoLattice {
 
     /// The lattice saved at `path` for `model`: an error naming the file if
     /// it is not a lattice or not `model`'s.
-    pub fn load(path: &Path, model: &Model) -> Result<AlbedoLattice> {
+    pub fn load(path: &Path, atlas: &Atlas) -> Result<AlbedoLattice> {
         let text = brdf_mapguard::read_regular(path).map_err(|e| CoreError::io(path, e))?;
         let bad = |why: String| CoreError::bad_file(path, why);
         let file: LatticeFile = serde_json::from_slice(&text)
@@ -297,10 +297,10 @@ impl AlbedoLattice {
                 file.format, file.version
             )));
         }
-        if file.model != model.fingerprint() {
+        if file.model != atlas.fingerprint() {
             return Err(bad(format!(
                 "built from another fit than {} (run brdf-atlas prepare again)",
-                model.path().display()
+                atlas.model().path().display()
             )));
         }
         let n = 1usize << FINEST;
