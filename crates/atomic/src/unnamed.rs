@@ -92,3 +92,46 @@ pub(crate) fn link(_file: &File, _to: &Path) -> io::Result<()> {
         "unnamed files need Linux",
     ))
 }
+
+/// A file that lives in memory only (`memfd_create`): it has no name in
+/// any directory, is never written back to a disk, and is freed with its
+/// last descriptor, so a process killed while it holds one leaves nothing.
+/// `name` shows in `/proc/PID/fd` only. `None` where the kernel has no
+/// such files.
+#[cfg(target_os = "linux")]
+pub(crate) fn open_in_memory(name: &str) -> io::Result<Option<File>> {
+    use std::ffi::CString;
+    use std::os::fd::FromRawFd;
+    let name = CString::new(name.replace('\0', "?")).expect("NUL bytes replaced");
+    // SAFETY: a valid NUL-terminated name; the flags are plain integers.
+    let fd = unsafe { libc::memfd_create(name.as_ptr(), libc::MFD_CLOEXEC) };
+    if fd < 0 {
+        let e = io::Error::last_os_error();
+        return match e.raw_os_error() {
+            Some(libc::ENOSYS | libc::EINVAL) => Ok(None),
+            _ => Err(e),
+        };
+    }
+    // SAFETY: a new descriptor that nothing else owns.
+    Ok(Some(unsafe { File::from_raw_fd(fd) }))
+}
+
+#[cfg(not(target_os = "linux"))]
+pub(crate) fn open_in_memory(_name: &str) -> io::Result<Option<File>> {
+    Ok(None)
+}
+
+/// The memory available for new work (`MemAvailable` of `/proc/meminfo`),
+/// bytes; `None` where it is not known.
+#[cfg(target_os = "linux")]
+pub(crate) fn available_memory() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    kib.checked_mul(1024)
+}
+
+#[cfg(not(target_os = "linux"))]
+pub(crate) fn available_memory() -> Option<u64> {
+    None
+}

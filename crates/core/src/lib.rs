@@ -51,7 +51,9 @@ mod model;
 mod progress;
 pub mod simd;
 
-pub use data::{Dataset, Precision, Rows, Store, StoreIdentity, TransformKind, build_store};
+pub use data::{
+    Dataset, Precision, Rows, Store, StoreIdentity, TransformKind, build_scratch_store, build_store,
+};
 pub use error::{CoreError, ParamError, Result};
 pub use eval::{fidelity, loo};
 pub use fit::{

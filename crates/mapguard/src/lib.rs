@@ -188,6 +188,16 @@ impl GuardedMap {
         })
     }
 
+    /// Another map of the same file, watched the same way: by a duplicate
+    /// of its descriptor when it is watched by one (the file need have no
+    /// name), else opened again by its path.
+    pub fn try_clone(&self) -> io::Result<GuardedMap> {
+        match &self.file {
+            Some(file) => Self::map_file(file.try_clone()?, &self.path, Watch::Descriptor),
+            None => Self::open(&self.path, Watch::Path),
+        }
+    }
+
     /// The mapped bytes.
     pub fn bytes(&self) -> &[u8] {
         &self.map

@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use brdf_atlas_core::{
     DEFAULT_TRANSFORM, Dataset, GplvmParams, GramData, NoProgress, OptimizerKind, Precision,
-    build_store, default_kernel,
+    build_scratch_store, default_kernel,
 };
 use brdf_merl::Dims;
 
@@ -47,7 +47,7 @@ pub fn measure(
         brdf_merl::synth::write_dir(&dir, n, DIMS, SEED)?;
         let data = Dataset::open_dir(&dir)?;
         let store = dir.join("default.store");
-        let (_, y) = build_store(
+        let (_, y) = build_scratch_store(
             &data,
             DEFAULT_TRANSFORM,
             Precision::F32,

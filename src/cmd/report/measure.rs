@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 use brdf_atlas_core::loo::{self, Evaluation};
 use brdf_atlas_core::{
     Atlas, Dataset, Fit, GplvmParams, GramData, Model, ModelFile, NoProgress, OptimizerKind,
-    Precision, Store, StoreRef, TransformKind, build_store,
+    Precision, Store, StoreRef, TransformKind, build_scratch_store,
 };
 use faer::Mat;
 
@@ -297,8 +297,10 @@ fn build(
     Ok((b.store, b.gram, b.y))
 }
 
-/// Build one store in `work` and its normalised Gram data, timed (the
-/// store; the Gram data is the normalisation of what the pass summed).
+/// Build one scratch store (named in `work`, held in memory and never
+/// written to disk, [`build_scratch_store`]) and its normalised Gram data,
+/// timed (the store; the Gram data is the normalisation of what the pass
+/// summed).
 pub fn build_timed(
     data: &Dataset,
     transform: TransformKind,
@@ -308,7 +310,7 @@ pub fn build_timed(
     let path = work.join(format!("{}-{}.store", transform.name(), precision.name()));
     let bars = Bars::new("store");
     let t = Instant::now();
-    let (store, y) = build_store(data, transform, precision, &path, &bars)?;
+    let (store, y) = build_scratch_store(data, transform, precision, &path, &bars)?;
     let time = t.elapsed();
     let gram = GramData::new(y.clone(), store.rows())?;
     Ok(Built {
@@ -398,7 +400,7 @@ pub fn in_memory_model(
         .unwrap_or_default();
     let store_ref = StoreRef::of(store, store_name);
     let file = ModelFile::new(data.names.clone(), fit, store, y.as_ref(), gram, store_ref);
-    let store = Store::open(store.path())?;
+    let store = store.try_clone()?;
     Ok(Model::new(work.join(format!("{name}.atlas")), file, store)?)
 }
 

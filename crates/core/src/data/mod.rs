@@ -6,7 +6,7 @@ pub mod store;
 pub mod transform;
 
 pub use dataset::Dataset;
-pub use store::{Precision, Rows, Store, StoreIdentity, build_store};
+pub use store::{Precision, Rows, Store, StoreIdentity, build_scratch_store, build_store};
 pub use transform::TransformKind;
 
 /// Write `count` synthetic materials (seed 5) of `dims` into `dir`, for tests.

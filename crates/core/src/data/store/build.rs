@@ -302,15 +302,57 @@ pub(crate) fn build_unnamed(
     out: &Path,
     progress: &dyn Progress,
 ) -> Result<(Store, Mat<f64>, PendingFile)> {
+    let layout = Layout::new(data.dims().values(), data.len(), precision);
+    let pending = PendingFile::create(out).map_err(|e| CoreError::write(out, e))?;
+    pending
+        .allocate(layout.len as u64)
+        .map_err(|e| CoreError::write(out, e))?;
+    let (store, y) = write_store(pending.file(), data, transform, precision, out, progress)?;
+    Ok((store, y, pending))
+}
+
+/// [`build_store`] into a scratch file that has no name and is thrown away
+/// with the last handle on the store ([`Store::try_clone`] makes more): in
+/// memory where the kernel allows and it takes at most a quarter of the
+/// memory available, never written back to a disk, and left behind by no
+/// run however it ends ([`brdf_atomic::scratch_file`]; else unnamed in
+/// `name`'s directory). `name` names the store in messages. For
+/// work a run throws away, as the report's stores.
+pub fn build_scratch_store(
+    data: &Dataset,
+    transform: TransformKind,
+    precision: Precision,
+    name: &Path,
+    progress: &dyn Progress,
+) -> Result<(Store, Mat<f64>)> {
+    let layout = Layout::new(data.dims().values(), data.len(), precision);
+    let dir = match name.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let label = name
+        .file_name()
+        .map_or_else(|| "store".into(), |f| f.to_string_lossy().into_owned());
+    let file = brdf_atomic::scratch_file(dir, &label, layout.len as u64)
+        .map_err(|e| CoreError::write(name, e))?;
+    write_store(&file, data, transform, precision, name, progress)
+}
+
+/// The store pass into `file`, already `Layout::len` bytes long: header,
+/// values, means and the unmeasured mask, and the Gram matrix summed on
+/// the way; the store mapped from `file` (`out` names it in messages).
+fn write_store(
+    file: &std::fs::File,
+    data: &Dataset,
+    transform: TransformKind,
+    precision: Precision,
+    out: &Path,
+    progress: &dyn Progress,
+) -> Result<(Store, Mat<f64>)> {
     let dims = data.dims();
     let n = data.len();
     let bins = dims.bins();
     let layout = Layout::new(dims.values(), n, precision);
-    let pending = PendingFile::create(out).map_err(|e| CoreError::write(out, e))?;
-    let file = pending.file();
-    pending
-        .allocate(layout.len as u64)
-        .map_err(|e| CoreError::write(out, e))?;
     let header = Layout::header(dims, n, precision, transform);
     file.write_all_at(&header, 0)
         .map_err(|e| CoreError::write(out, e))?;
@@ -413,7 +455,7 @@ pub(crate) fn build_unnamed(
         .map_err(|e| CoreError::write(out, e))?;
     let mapped = file.try_clone().map_err(|e| CoreError::io(out, e))?;
     let store = Store::from_file(mapped, out)?;
-    Ok((store, y, pending))
+    Ok((store, y))
 }
 
 #[cfg(test)]
@@ -508,6 +550,41 @@ mod tests {
                 // The stored-value Gram equals the one built in the same pass, bit for bit.
                 assert_eq!(store.gram(&NoProgress), y);
             }
+        }
+    }
+
+    #[test]
+    fn a_scratch_store_is_the_named_store_and_leaves_no_file() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dims = Dims::new(6, 6, 12).unwrap();
+        synth_dir(tmp.path(), 4, dims);
+        let data = Dataset::open_dir(tmp.path()).unwrap();
+        let work = tmp.path().join("work");
+        std::fs::create_dir(&work).unwrap();
+        for precision in [Precision::F64, Precision::F32] {
+            let named = tmp.path().join(format!("named-{}.store", precision.name()));
+            let (a, ya) =
+                build_store(&data, TransformKind::Log, precision, &named, &NoProgress).unwrap();
+            let name = work.join("scratch.store");
+            let (b, yb) =
+                build_scratch_store(&data, TransformKind::Log, precision, &name, &NoProgress)
+                    .unwrap();
+            let c = b.try_clone().unwrap();
+            drop(b);
+            assert_eq!(ya, yb);
+            assert_eq!(c.path(), name);
+            assert_eq!(c.len_bytes(), a.len_bytes());
+            assert_eq!(c.mean(), a.mean());
+            assert_eq!(c.unmeasured(), a.unmeasured());
+            let (mut ra, mut rc) = (vec![0.0; 4], vec![0.0; 4]);
+            for row in 0..dims.values() {
+                a.copy_rows(row, &mut ra);
+                c.copy_rows(row, &mut rc);
+                assert_eq!(ra, rc, "row {row}");
+            }
+            assert_eq!(c.gram(&NoProgress), ya);
+            // Nothing in the directory it is named in, hidden files included.
+            assert_eq!(std::fs::read_dir(&work).unwrap().count(), 0);
         }
     }
 

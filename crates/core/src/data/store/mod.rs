@@ -44,9 +44,9 @@ use crate::progress::Progress;
 mod build;
 mod energy;
 
-pub use build::build_store;
 pub(crate) use build::build_unnamed;
 use build::gram_fold;
+pub use build::{build_scratch_store, build_store};
 pub(crate) use energy::EnergyBound;
 
 use crate::dense::gram::syrk_lower_add;
@@ -196,6 +196,19 @@ impl Store {
     pub(crate) fn from_file(file: std::fs::File, path: &Path) -> Result<Store> {
         let map = GuardedMap::from_file(file, path).map_err(|e| CoreError::io(path, e))?;
         Self::from_map(map, path.to_path_buf())
+    }
+
+    /// Another handle on the same store: the same file mapped again (by its
+    /// descriptor, so a store without a name, [`build_scratch_store`]'s,
+    /// can have several).
+    ///
+    /// [`build_scratch_store`]: crate::build_scratch_store
+    pub fn try_clone(&self) -> Result<Store> {
+        let map = self
+            .map
+            .try_clone()
+            .map_err(|e| CoreError::io(&self.path, e))?;
+        Self::from_map(map, self.path.clone())
     }
 
     fn from_map(map: GuardedMap, path: PathBuf) -> Result<Store> {

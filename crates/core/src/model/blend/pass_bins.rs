@@ -57,7 +57,9 @@ impl Every {
         self.theta_d <= 1 && self.phi_d <= 1
     }
 
-    pub(crate) fn keeps(self, dims: Dims, bin: usize) -> bool {
+    /// Whether `bin` is kept: the definition [`Every::rows`] lists.
+    #[cfg(test)]
+    fn keeps(self, dims: Dims, bin: usize) -> bool {
         let (_, id, ip) = dims.unbin(bin);
         let keep = |i: usize, step: usize, len: usize| {
             i == Every::kept_in(Every::cell(i, step), step, len)
@@ -70,13 +72,41 @@ impl Every {
         if self.keeps_every_bin() {
             return None;
         }
-        let bins = dims.bins();
-        Some(
-            (0..rows)
-                .filter(|&r| self.keeps(dims, r % bins))
-                .map(|r| r as u32)
-                .collect(),
-        )
+        let band = dims.theta_d * dims.phi_d;
+        let mut out = Vec::new();
+        for start in (0..rows).step_by(band.max(1)) {
+            self.push_band(dims, start, rows, &mut out);
+        }
+        Some(out)
+    }
+
+    /// The kept rows of the theta_h band whose first row is `start`,
+    /// ascending.
+    pub(crate) fn band_rows(self, dims: Dims, start: usize) -> Vec<u32> {
+        let mut out = Vec::new();
+        self.push_band(dims, start, usize::MAX, &mut out);
+        out
+    }
+
+    /// Appends the kept rows below `end` of the theta_h band whose first
+    /// row is `start`: the bins [`Every::keeps`] accepts, listed without
+    /// testing each.
+    fn push_band(self, dims: Dims, start: usize, end: usize, out: &mut Vec<u32>) {
+        let kept = |step: usize, len: usize| -> Vec<usize> {
+            (0..len)
+                .step_by(step.max(1))
+                .map(|cell| Every::kept_in(cell, step, len))
+                .collect()
+        };
+        let phi_d = kept(self.phi_d, dims.phi_d);
+        for id in kept(self.theta_d, dims.theta_d) {
+            for &ip in &phi_d {
+                let r = start + id * dims.phi_d + ip;
+                if r < end {
+                    out.push(r as u32);
+                }
+            }
+        }
     }
 
     /// The dense albedo rule ([`Quadrature::dense`], 2 sub-cells a bin, the
@@ -95,5 +125,37 @@ impl Every {
             w[kept] += wb;
         }
         w
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn listed_rows_are_the_kept_bins_of_every_channel() {
+        for (h, d, p) in [(90, 90, 180), (5, 7, 13), (3, 1, 2)] {
+            let dims = Dims::new(h, d, p).unwrap();
+            for every in [
+                Every::QUARTER,
+                Every::EIGHTH,
+                Every {
+                    theta_d: 3,
+                    phi_d: 5,
+                },
+                Every {
+                    theta_d: 2,
+                    phi_d: 1,
+                },
+            ] {
+                let rows = 3 * dims.bins();
+                let by_test: Vec<u32> = (0..rows)
+                    .filter(|&r| every.keeps(dims, r % dims.bins()))
+                    .map(|r| r as u32)
+                    .collect();
+                assert_eq!(every.rows(dims, rows), Some(by_test), "{dims} {every:?}");
+            }
+            assert_eq!(Every::BIN.rows(dims, 3 * dims.bins()), None);
+        }
     }
 }

@@ -214,12 +214,8 @@ fn banded_clamp_sums(model: &Model, blends: &[Blend<'_>], every: Every) -> Vec<C
             let mut acc = vec![ClampSums::default(); m];
             let (mut z, mut t) = (Vec::new(), Vec::new());
             // The band's kept rows (none listed when all are kept).
-            let kept: Option<Vec<u32>> = (!every.keeps_every_bin()).then(|| {
-                (start..start + per)
-                    .filter(|&r| every.keeps(dims, r % bins))
-                    .map(|r| r as u32)
-                    .collect()
-            });
+            let kept: Option<Vec<u32>> =
+                (!every.keeps_every_bin()).then(|| every.band_rows(dims, start));
             let count = kept.as_ref().map_or(per, Vec::len);
             for from in (0..count).step_by(BLOCK) {
                 let len = BLOCK.min(count - from);
