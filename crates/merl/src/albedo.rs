@@ -190,6 +190,92 @@ impl Quadrature {
         Quadrature::compact(dims, dense)
     }
 
+    /// This rule on every `theta_d_step`-th theta_d bin and every
+    /// `phi_d_step`-th phi_d bin (all of theta_h, where highlights live):
+    /// the rule's integral of the table's interpolant through the kept
+    /// bins, linear or (`cubic`) cubic Lagrange in theta_d and in phi_d,
+    /// periodic in phi_d (an isotropic, reciprocal BRDF repeats with period
+    /// pi there). So each bin's weight is shared among the kept bins whose
+    /// interpolant reaches it, in the interpolant's proportions. The first
+    /// and last theta_d bins are always kept. A bin whose interpolant
+    /// would read a bin this rule gives no weight (below the horizon: its
+    /// value need not belong to the same smooth surface) keeps its own
+    /// weight and is read itself. Cubic weights can be negative; the rule
+    /// stays exact for any table that is cubic between the kept bins.
+    /// Steps of 0 or 1 keep every bin along their axis.
+    pub fn reduced(
+        &self,
+        theta_d_step: usize,
+        phi_d_step: usize,
+        cubic: bool,
+        readable: impl Fn(usize) -> bool,
+    ) -> Quadrature {
+        let dims = self.dims;
+        let mut dense = vec![0.0f64; dims.bins()];
+        for (&b, &w) in self.bins.iter().zip(&self.weights) {
+            dense[b as usize] = w;
+        }
+        let along_d = Stencils::new(dims.theta_d, theta_d_step, false, cubic);
+        let along_p = Stencils::new(dims.phi_d, phi_d_step, true, cubic);
+        let mut rule = vec![0.0f64; dims.bins()];
+        for (&b, &w) in self.bins.iter().zip(&self.weights) {
+            let (ih, id, ip) = dims.unbin(b as usize);
+            let (sd, sp) = (along_d.at(id), along_p.at(ip));
+            let readable = sd
+                .iter()
+                .all(|&(nd, _)| sp.iter().all(|&(np, _)| readable(dims.bin(ih, nd, np))));
+            if !readable {
+                rule[b as usize] += w;
+                continue;
+            }
+            for &(nd, wd) in sd {
+                for &(np, wp) in sp {
+                    rule[dims.bin(ih, nd, np)] += w * wd * wp;
+                }
+            }
+        }
+        let (bins, weights) = rule
+            .iter()
+            .enumerate()
+            .filter(|(_, w)| **w != 0.0)
+            .map(|(b, w)| (b as u32, *w))
+            .unzip();
+        Quadrature {
+            dims,
+            bins,
+            weights,
+        }
+    }
+
+    /// Monte Carlo sampling of this rule: `samples` bins drawn at random
+    /// (seeded, so the same rule every time) with probability proportional
+    /// to their weight, each draw weighing the total weight over
+    /// `samples`, so the estimate is unbiased and exact for a constant
+    /// table; its error falls as one over the square root of `samples`.
+    pub fn monte_carlo(&self, samples: usize, seed: u64) -> Quadrature {
+        let dims = self.dims;
+        let mut cumulative = Vec::with_capacity(self.weights.len());
+        let mut total = 0.0f64;
+        for &w in &self.weights {
+            total += w.max(0.0);
+            cumulative.push(total);
+        }
+        let mut rule = vec![0.0f64; dims.bins()];
+        if samples == 0 || total <= 0.0 {
+            return Quadrature::compact(dims, rule);
+        }
+        let share = total / samples as f64;
+        let mut rng = crate::synth::SplitMix64::new(seed);
+        for _ in 0..samples {
+            let u = rng.next_f64() * total;
+            let k = cumulative
+                .partition_point(|&c| c <= u)
+                .min(self.bins.len() - 1);
+            rule[self.bins[k] as usize] += share;
+        }
+        Quadrature::compact(dims, rule)
+    }
+
     /// The grid this rule is for.
     pub fn dims(&self) -> Dims {
         self.dims
@@ -236,6 +322,71 @@ impl Quadrature {
             "quadrature rule built for other dims"
         );
         self.integrate(|b| table.rgb_or_zero(b))
+    }
+}
+
+/// The interpolation stencils of one axis of a reduced rule
+/// ([`Quadrature::reduced`]): for each bin index, the kept indices its
+/// interpolant reads and their weights.
+struct Stencils {
+    at: Vec<Vec<(usize, f64)>>,
+}
+
+impl Stencils {
+    /// Kept indices `0, step, 2 step, ...` of `len` (and `len - 1` unless
+    /// `periodic`, where the axis wraps round with period `len`), linear
+    /// or cubic Lagrange stencils.
+    fn new(len: usize, step: usize, periodic: bool, cubic: bool) -> Stencils {
+        let step = step.max(1);
+        let mut nodes: Vec<usize> = (0..len).step_by(step).collect();
+        if !periodic && nodes.last() != Some(&(len - 1)) {
+            nodes.push(len - 1);
+        }
+        let k = nodes.len();
+        // The coordinate of node j, for j past either end of a periodic axis.
+        let coord = |j: isize| -> f64 {
+            let kk = k as isize;
+            let wraps = j.div_euclid(kk);
+            nodes[j.rem_euclid(kk) as usize] as f64 + (wraps * len as isize) as f64
+        };
+        let index = |j: isize| nodes[j.rem_euclid(k as isize) as usize];
+        let at = (0..len)
+            .map(|i| {
+                // The last node at or before i.
+                let j = nodes.partition_point(|&n| n <= i) as isize - 1;
+                if nodes[j as usize] == i || k == 1 {
+                    return vec![(nodes[j as usize], 1.0)];
+                }
+                let first = if !cubic {
+                    j
+                } else if periodic {
+                    j - 1
+                } else {
+                    (j - 1).clamp(0, (k as isize - 4).max(0))
+                };
+                let count = if cubic {
+                    4.min(if periodic { 4 } else { k })
+                } else {
+                    2
+                };
+                let xs: Vec<f64> = (first..first + count as isize).map(coord).collect();
+                let x = i as f64;
+                (0..count)
+                    .map(|a| {
+                        let weight: f64 = (0..count)
+                            .filter(|&c| c != a)
+                            .map(|c| (x - xs[c]) / (xs[a] - xs[c]))
+                            .product();
+                        (index(first + a as isize), weight)
+                    })
+                    .collect()
+            })
+            .collect();
+        Stencils { at }
+    }
+
+    fn at(&self, i: usize) -> &[(usize, f64)] {
+        &self.at[i]
     }
 }
 
@@ -322,6 +473,96 @@ mod tests {
                 "{k}: {got} vs {want}"
             );
         }
+    }
+
+    #[test]
+    fn reduced_rules_integrate_their_interpolants_exactly() {
+        let dims = Dims::new(12, 30, 36).unwrap();
+        let dense = Quadrature::dense(dims, 2);
+        let everywhere = |_| true;
+        assert_eq!(dense.reduced(1, 1, true, everywhere), dense);
+        // A table cubic in theta_d's index (and of any shape in theta_h):
+        // the cubic rule's interpolant is the table itself.
+        let cubic = MerlTable::from_fn(dims, |b| {
+            let (ih, id, _) = dims.unbin(b);
+            let t = id as f64;
+            let v = 0.1 + 0.02 * ih as f64 + 1e-3 * t - 2e-4 * t * t + 9e-6 * t * t * t;
+            Some([v, 0.5 * v, 2.0 * v])
+        });
+        // A table periodic and smooth in phi_d, linear in theta_d.
+        let periodic = MerlTable::from_fn(dims, |b| {
+            let (_, id, ip) = dims.unbin(b);
+            let phi = (ip as f64) / dims.phi_d as f64 * 2.0 * PI;
+            let v = 0.3 + 0.01 * id as f64 + 0.05 * phi.cos();
+            Some([v, v, v])
+        });
+        let want = dense.albedo(&cubic);
+        for step in [2, 3, 4, 7] {
+            let got = dense.reduced(step, 1, true, everywhere).albedo(&cubic);
+            for c in 0..3 {
+                assert!(
+                    (got[c] - want[c]).abs() <= 1e-12 * want[c],
+                    "step {step}: {got:?} {want:?}"
+                );
+            }
+            // Fewer bins, and a linear interpolant is not exact for a cubic.
+            let linear = dense.reduced(step, 1, false, everywhere);
+            assert!(
+                linear.len() < dense.len(),
+                "{} {}",
+                linear.len(),
+                dense.len()
+            );
+            assert!((linear.albedo(&cubic)[0] - want[0]).abs() > 1e-9 * want[0]);
+        }
+        // Along phi_d a cubic interpolant of a cosine is close, not exact;
+        // closer as the step shrinks.
+        let want = dense.albedo(&periodic)[0];
+        let err = |step| {
+            (dense.reduced(1, step, true, everywhere).albedo(&periodic)[0] - want).abs() / want
+        };
+        assert!(
+            err(2) < 1e-5 && err(6) < 1e-3 && err(2) < err(6),
+            "{} {}",
+            err(2),
+            err(6)
+        );
+        // A bin whose interpolant would read an unreadable bin is read itself.
+        let unreadable = dims.bin(3, 8, 5);
+        let guarded = dense.reduced(4, 6, true, |b| b != unreadable);
+        assert!(!guarded.bins().contains(&(unreadable as u32)));
+        let both = guarded.albedo(&cubic)[0];
+        assert!((both - dense.albedo(&cubic)[0]).abs() <= 1e-3 * both);
+    }
+
+    #[test]
+    fn monte_carlo_rules_are_unbiased_and_converge() {
+        let dims = Dims::new(30, 30, 60).unwrap();
+        let dense = Quadrature::dense(dims, 2);
+        let rho = [0.8, 0.5, 0.05];
+        // Exact for a constant table: every draw weighs the same.
+        let a = dense.monte_carlo(1000, 7).albedo(&lambert(dims, rho));
+        let want = dense.albedo(&lambert(dims, rho));
+        for c in 0..3 {
+            assert!((a[c] - want[c]).abs() <= 1e-12, "{a:?} {want:?}");
+        }
+        // A sharp table: the error of many seeds shrinks with the samples.
+        let sharp = MerlTable::from_fn(dims, |b| {
+            let (ih, _, _) = dims.unbin(b);
+            let v = (-(ih as f64) / 3.0).exp() * 10.0 + 0.05;
+            Some([v, v, v])
+        });
+        let want = dense.albedo(&sharp)[0];
+        let rms = |samples| {
+            let sum: f64 = (0..16)
+                .map(|seed| (dense.monte_carlo(samples, seed).albedo(&sharp)[0] - want).powi(2))
+                .sum();
+            (sum / 16.0).sqrt() / want
+        };
+        let (few, many) = (rms(256), rms(16384));
+        assert!(many < few / 4.0 && many < 0.05, "{few} {many}");
+        // The same seed gives the same rule.
+        assert_eq!(dense.monte_carlo(100, 3), dense.monte_carlo(100, 3));
     }
 
     #[test]

@@ -87,6 +87,13 @@ pub fn write_all(dir: &Path, r: &Results) -> Result<(), Error> {
             row(&[&m.samples, &m.bins, &e(m.max_err), &e(m.mean_err), &time])
         }),
     );
+    let rules = table(
+        "rule,bins,max_rel_error,mean_rel_error,seconds_per_point",
+        r.rules.iter().map(|m| {
+            let (rule, time) = (format!("\"{}\"", m.rule), seconds(m.per_point, 5));
+            row(&[&rule, &m.bins, &e(m.max_err), &e(m.mean_err), &time])
+        }),
+    );
     let sizes = table(
         "method,size,seconds",
         r.sizes
@@ -114,6 +121,7 @@ pub fn write_all(dir: &Path, r: &Results) -> Result<(), Error> {
         ("loo-materials.csv", per_material),
         ("fits.csv", fits),
         ("map-samples.csv", samples),
+        ("map-rules.csv", rules),
         ("map-size.csv", sizes),
         ("stores.csv", stores),
         ("precision.csv", precision),

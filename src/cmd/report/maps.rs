@@ -7,13 +7,14 @@ use std::time::Instant;
 
 use brdf_atlas_core::map_error::map_error;
 use brdf_atlas_core::{
-    AlbedoMethod, Atlas, BlendRule, DEFAULT_SAMPLES, LATTICE_TOLERANCE, NoProgress, View,
+    AlbedoMethod, AlbedoRequest, Atlas, BlendRule, DEFAULT_SAMPLES, Integration, LATTICE_TOLERANCE,
+    NODE_PHI_D_STEP, NoProgress, View,
 };
 
 use brdf_merl::Quadrature;
 
 use super::plan::Plan;
-use super::results::{MethodRow, Results, SampleRow, SizeRow};
+use super::results::{MethodRow, Results, RuleRow, SampleRow, SizeRow};
 use super::timed;
 use crate::error::Error;
 use crate::progress::Bars;
@@ -60,6 +61,84 @@ pub fn samples(model: &Atlas, plan: &Plan, r: &mut Results) -> Result<(), Error>
             time,
         });
     }
+    Ok(())
+}
+
+/// Seed of the points of the rules' table.
+const RULE_SEED: u64 = 5;
+
+/// What the exact albedo costs by rule: the default material's albedo at
+/// random points of the default view from one pass a rule, against the
+/// dense rule's: the map's nodes' rule, reduced rules that integrate a
+/// cubic or linear interpolant through every few theta_d and phi_d bins,
+/// and Monte Carlo sampling of the dense rule.
+pub fn rules(model: &Atlas, plan: &Plan, r: &mut Results) -> Result<(), Error> {
+    let view = View::default();
+    let mut rng = brdf_merl::synth::SplitMix64::new(RULE_SEED);
+    let points: Vec<[f64; 2]> = (0..plan.rule_points)
+        .map(|_| [rng.range(view.x0, view.x1), rng.range(view.y0, view.y1)])
+        .collect();
+    let count = points.len().max(1) as u32;
+    let dense = model.albedo_rule().clone();
+    let request = AlbedoRequest::new().rule(BlendRule::Floor);
+    let t = Instant::now();
+    let reference = model.exact_albedos(&points, request)?;
+    r.rules.push(RuleRow {
+        rule: "dense (the reference: every bin, 2 sub-cells a side)".into(),
+        bins: dense.len(),
+        per_point: t.elapsed() / count,
+        max_err: 0.0,
+        mean_err: 0.0,
+    });
+    let step = NODE_PHI_D_STEP;
+    let rules: Vec<(String, Quadrature)> = vec![
+        (
+            format!("every {step}th phi_d bin, its cell's weight (the map's nodes)"),
+            dense.every_phi_d(step),
+        ),
+        (
+            "cubic interpolant, every 2nd theta_d and 4th phi_d bin".into(),
+            model.reduced_rule(2, 4, true),
+        ),
+        (
+            "cubic interpolant, every 3rd theta_d and 6th phi_d bin".into(),
+            model.reduced_rule(3, 6, true),
+        ),
+        (
+            "linear interpolant, every 3rd theta_d and 6th phi_d bin".into(),
+            model.reduced_rule(3, 6, false),
+        ),
+        (
+            "Monte Carlo, 4096 bins drawn by weight".into(),
+            dense.monte_carlo(4096, RULE_SEED),
+        ),
+        (
+            "Monte Carlo, 65536 bins drawn by weight".into(),
+            dense.monte_carlo(65536, RULE_SEED),
+        ),
+    ];
+    for (name, rule) in rules {
+        let t = Instant::now();
+        let got = model.exact_albedos(&points, request.integration(Integration::Rule(&rule)))?;
+        let per_point = t.elapsed() / count;
+        let (mut max_err, mut sum) = (0.0f64, 0.0f64);
+        for (g, want) in got.iter().zip(&reference) {
+            let scale = want.iter().fold(1e-12f64, |a, v| a.max(v.abs()));
+            for c in 0..3 {
+                let e = (g[c] - want[c]).abs() / scale;
+                max_err = max_err.max(e);
+                sum += e;
+            }
+        }
+        r.rules.push(RuleRow {
+            rule: name,
+            bins: rule.len(),
+            per_point,
+            max_err,
+            mean_err: sum / (3 * got.len().max(1)) as f64,
+        });
+    }
+    r.rule_points = points.len();
     Ok(())
 }
 

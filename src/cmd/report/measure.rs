@@ -79,6 +79,9 @@ pub fn measure(
         steps.section("Albedo map: sample count vs error vs time");
         steps.say("albedo map: sample count vs error vs time")?;
         super::maps::samples(log_model, plan, r)?;
+        steps.section("Albedo map: exact-albedo rules vs error vs time");
+        steps.say("albedo map: exact-albedo rules against the dense rule")?;
+        super::maps::rules(log_model, plan, r)?;
         steps.section("Albedo map: the default method and the prepared map");
         steps.say(
             "albedo map: the albedo field and the prepared lattice against the per-pixel rule",

@@ -39,6 +39,9 @@ pub struct Plan {
     pub timed_size: usize,
     /// Latent points reconstructed for the precision comparison.
     pub points: usize,
+    /// Random points of the default view the exact-albedo rules are
+    /// compared at.
+    pub rule_points: usize,
     /// Time short runs three times and keep the median.
     pub repeat: bool,
     /// Points per side of the plausibility grid.
@@ -87,6 +90,7 @@ impl Plan {
                 grid: 2,
                 timed_size: 64,
                 points: 2,
+                rule_points: 16,
                 repeat: false,
                 plausibility_grid: PLAUSIBILITY_GRID[0],
                 prepare: args.prepare,
@@ -108,6 +112,7 @@ impl Plan {
             grid: 4,
             timed_size: if args.thorough { 256 } else { 128 },
             points: 4,
+            rule_points: 64,
             repeat: true,
             plausibility_grid: PLAUSIBILITY_GRID[1 + usize::from(args.thorough)],
             prepare: args.prepare || args.thorough,

@@ -68,6 +68,17 @@ pub struct SampleRow {
     pub time: Duration,
 }
 
+/// A quadrature rule for the exact albedo, against the dense rule.
+pub struct RuleRow {
+    /// What the report calls it.
+    pub rule: String,
+    pub bins: usize,
+    /// Wall time of one pass for all the points, divided by their count.
+    pub per_point: Duration,
+    pub max_err: f64,
+    pub mean_err: f64,
+}
+
 /// A map method at a view: the default (the albedo field where it fits its
 /// budget) or the per-pixel rule, its error and time.
 #[derive(Clone)]
@@ -132,6 +143,10 @@ pub struct Results {
     pub reference_time: Duration,
     pub reference_pixels: usize,
     pub sizes: Vec<SizeRow>,
+    /// Exact-albedo rules against the dense rule, the dense rule first
+    /// (its error 0), at `rule_points` random points of the default view.
+    pub rules: Vec<RuleRow>,
+    pub rule_points: usize,
     /// The default map method against the per-pixel rule, by view.
     pub methods: Vec<MethodRow>,
     /// Side of the maps of `methods`.

@@ -403,7 +403,9 @@ mod tests {
                 .collect();
             let got = cosine_products(dims);
             assert!(
-                got.iter().zip(&by_bin).all(|(a, b)| a.to_bits() == b.to_bits()),
+                got.iter()
+                    .zip(&by_bin)
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
                 "{dims}"
             );
         }

@@ -122,6 +122,22 @@ impl Atlas {
         })
     }
 
+    /// The dense rule on every `theta_d`-th theta_d and `phi_d`-th phi_d
+    /// bin, each bin's weight shared among the kept bins its linear or
+    /// (`cubic`) cubic interpolant reads ([`Quadrature::reduced`]); bins
+    /// whose interpolant would read a bin unmeasured in some channel are
+    /// read themselves. What a reduced rule buys is measured by the report
+    /// (its map section's table of rules) against the dense rule.
+    pub fn reduced_rule(&self, theta_d: usize, phi_d: usize, cubic: bool) -> Quadrature {
+        let (store, bins) = (self.model.store(), self.model.dims().bins());
+        let unmeasured = store.unmeasured();
+        self.model
+            .albedo_rule()
+            .reduced(theta_d, phi_d, cubic, |b| {
+                (0..3).all(|c| unmeasured[c * bins + b] == 0)
+            })
+    }
+
     /// The rows of the map's per-pixel rule (the default sample count), with
     /// which a field is planned before its exact nodes are paid for; built once.
     pub(crate) fn plan_rows(&self) -> &RuleRows {
