@@ -190,10 +190,24 @@ pub(crate) fn floor_rows(t: &mut [f64], c: &[f64], mean: &[f64], top: &[f64], r:
 /// reach for each (the exact pass: one store row at many points).
 pub(crate) fn floor_points(t: &mut [f64], c: &[f64], mean: f64, top: f64, r: &[f64]) {
     #[cfg(target_arch = "x86_64")]
-    if crate::simd::has_avx2_fma() {
-        // SAFETY: the CPU has AVX2 and FMA (checked just above).
-        return unsafe { floor_points_fma(t, c, mean, top, r) };
+    {
+        if crate::simd::has_avx512f() && crate::simd::has_avx2_fma() {
+            // SAFETY: the CPU has AVX-512F, AVX2 and FMA (checked just above).
+            return unsafe { floor_points_avx512(t, c, mean, top, r) };
+        }
+        if crate::simd::has_avx2_fma() {
+            // SAFETY: the CPU has AVX2 and FMA (checked just above).
+            return unsafe { floor_points_fma(t, c, mean, top, r) };
+        }
     }
+    floor_points_portable(t, c, mean, top, r);
+}
+
+/// [`floor_points`] in eight lanes (the exact pass's floor is as costly as
+/// its products); the same bits as the other paths.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2,fma")]
+fn floor_points_avx512(t: &mut [f64], c: &[f64], mean: f64, top: f64, r: &[f64]) {
     floor_points_portable(t, c, mean, top, r);
 }
 
@@ -354,6 +368,17 @@ mod tests {
         floor_values(&mut out, &c, &top);
         for k in 0..50 {
             assert_eq!(out[k].to_bits(), floor_capped(g[k], c[k], top[k]).to_bits());
+        }
+        // The exact pass's rule (one mean and brightest value, a reach a
+        // value) is floor_capped value by value, on whichever path the CPU
+        // takes (eight lanes, four, or one).
+        let (m, u) = (0.3, 2.5);
+        let r: Vec<f64> = (0..50).map(|_| rng.range(0.0, 1.0)).collect();
+        let mut out = g.clone();
+        floor_points(&mut out, &c, m, u, &r);
+        for k in 0..50 {
+            let want = floor_capped(m + g[k], m + c[k], m + reach_cap(c[k], u, r[k])) - m;
+            assert_eq!(out[k].to_bits(), want.to_bits(), "{k}");
         }
     }
 
