@@ -139,10 +139,12 @@ fn field_map_is_within_one_percent_of_the_dense_rule_at_every_zoom() {
                 panic!("a log map without a prepared map is a field or per pixel")
             }
         }
-        // The small views always get a field.
+        // The small views always get a field, within 0.1% of the dense rule.
         if k == 1 || k == 2 {
             assert!(matches!(map.method, AlbedoMethod::Field { .. }), "{view:?}");
+            assert!(worst <= 1e-3, "view {view:?}: worst error {worst:.3e}");
         }
+        eprintln!("view {view:?}: {:?}, worst {worst:.2e}", map.method);
     }
     assert!(fields >= 2);
 }
