@@ -7,6 +7,7 @@
 
 use brdf_merl::Quadrature;
 
+use crate::data::Store;
 use crate::data::transform::InverseForm;
 use crate::dense::product::matmul;
 use crate::error::{CoreError, Result};
@@ -249,10 +250,9 @@ impl Atlas {
                     let len = range.len();
                     s.t64.resize(m * len, 0.0);
                     s.z64.resize(n * len, 0.0);
-                    let rows = &rule.rows[range.clone()];
-                    for (k, &row) in rows.iter().enumerate() {
-                        store.copy_rows(row, &mut s.z64[k * n..(k + 1) * n]);
-                    }
+                    s.top.resize(len, 0.0);
+                    let tops = floor.then_some(&mut s.top[..]);
+                    gather_rows(store, &rule.rows[range.clone()], &mut s.z64, tops);
                     matmul(&mut s.t64, &a, &s.z64, n);
                     if floor {
                         s.v64.resize(m * len, 0.0);
@@ -265,8 +265,7 @@ impl Atlas {
                         if floor {
                             let (t, v) =
                                 (&mut s.t64[k * m..(k + 1) * m], &s.v64[k * m..(k + 1) * m]);
-                            let top = top_of(&s.z64[k * n..(k + 1) * n]);
-                            floor_points(t, v, mu, top, &reach[c]);
+                            floor_points(t, v, mu, s.top[k], &reach[c]);
                         }
                         add_row(acc, &s.t64[k * m..(k + 1) * m], mu, wt, rule.exponential);
                     }
@@ -283,6 +282,51 @@ impl Atlas {
         }
         self.model.verify()?;
         Ok(out)
+    }
+}
+
+/// The store's `rows` as f64, one after another in `z` (`n` values a
+/// row), and with `tops` each row's largest value ([`top_of`]): per-row
+/// work of the exact pass that does not depend on the points, in code
+/// compiled for the widest vectors the CPU has (a conversion and a maximum
+/// are exact: the same values on every path).
+fn gather_rows(store: &Store, rows: &[usize], z: &mut [f64], tops: Option<&mut [f64]>) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if crate::simd::has_avx512f() {
+            // SAFETY: the CPU has AVX-512F (checked just above).
+            return unsafe { gather_rows_avx512(store, rows, z, tops) };
+        }
+        if crate::simd::has_avx2() {
+            // SAFETY: the CPU has AVX2 (checked just above).
+            return unsafe { gather_rows_avx2(store, rows, z, tops) };
+        }
+    }
+    gather_rows_portable(store, rows, z, tops);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2")]
+fn gather_rows_avx512(store: &Store, rows: &[usize], z: &mut [f64], tops: Option<&mut [f64]>) {
+    gather_rows_portable(store, rows, z, tops);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn gather_rows_avx2(store: &Store, rows: &[usize], z: &mut [f64], tops: Option<&mut [f64]>) {
+    gather_rows_portable(store, rows, z, tops);
+}
+
+#[inline(always)]
+fn gather_rows_portable(store: &Store, rows: &[usize], z: &mut [f64], tops: Option<&mut [f64]>) {
+    let n = store.n();
+    for (&row, out) in rows.iter().zip(z.chunks_exact_mut(n)) {
+        store.copy_rows(row, out);
+    }
+    if let Some(tops) = tops {
+        for (t, row) in tops.iter_mut().zip(z.chunks_exact(n)) {
+            *t = top_of(row);
+        }
     }
 }
 
@@ -335,6 +379,7 @@ fn add_row_portable(acc: &mut [f64], t: &[f64], mu: f64, wt: f64, exponential: b
 /// its values at the nodes (kept between calls, so a pass allocates nothing).
 #[derive(Default)]
 struct Scratch {
+    top: Vec<f64>,
     v64: Vec<f64>,
     z64: Vec<f64>,
     t64: Vec<f64>,

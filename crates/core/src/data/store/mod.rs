@@ -371,6 +371,7 @@ impl Store {
     }
 
     /// Copy rows `r0..r0 + out.len() / n` into `out` as f64.
+    #[inline]
     pub fn copy_rows(&self, r0: usize, out: &mut [f64]) {
         let (start, len) = (r0 * self.layout.n, out.len());
         match self.z() {
