@@ -118,10 +118,28 @@ pub(crate) fn caps<T: Copy + PartialOrd + Into<f64>>(
     out: &mut [f64],
 ) {
     #[cfg(target_arch = "x86_64")]
-    if crate::simd::has_avx2() {
-        // SAFETY: the CPU has AVX2 (checked just above).
-        return unsafe { caps_avx2(z, n, mean, out) };
+    {
+        if crate::simd::has_avx512f() {
+            // SAFETY: the CPU has AVX-512F (checked just above).
+            return unsafe { caps_avx512(z, n, mean, out) };
+        }
+        if crate::simd::has_avx2() {
+            // SAFETY: the CPU has AVX2 (checked just above).
+            return unsafe { caps_avx2(z, n, mean, out) };
+        }
     }
+    caps_portable(z, n, mean, out);
+}
+
+/// [`caps`] in AVX-512 code (a maximum is exact: the same values).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2")]
+fn caps_avx512<T: Copy + PartialOrd + Into<f64>>(
+    z: &[T],
+    n: usize,
+    mean: &[f64],
+    out: &mut [f64],
+) {
     caps_portable(z, n, mean, out);
 }
 
@@ -153,9 +171,15 @@ fn caps_portable<T: Copy + PartialOrd + Into<f64>>(
 /// routine otherwise).
 pub(crate) fn floor_values(g: &mut [f64], c: &[f64], top: &[f64]) {
     #[cfg(target_arch = "x86_64")]
-    if crate::simd::has_avx2_fma() {
-        // SAFETY: the CPU has AVX2 and FMA (checked just above).
-        return unsafe { floor_values_fma(g, c, top) };
+    {
+        if crate::simd::has_avx512f() && crate::simd::has_avx2_fma() {
+            // SAFETY: the CPU has AVX-512F, AVX2 and FMA (checked just above).
+            return unsafe { floor_values_avx512(g, c, top) };
+        }
+        if crate::simd::has_avx2_fma() {
+            // SAFETY: the CPU has AVX2 and FMA (checked just above).
+            return unsafe { floor_values_fma(g, c, top) };
+        }
     }
     floor_values_portable(g, c, top);
 }
@@ -163,6 +187,12 @@ pub(crate) fn floor_values(g: &mut [f64], c: &[f64], top: &[f64]) {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 fn floor_values_fma(g: &mut [f64], c: &[f64], top: &[f64]) {
+    floor_values_portable(g, c, top);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2,fma")]
+fn floor_values_avx512(g: &mut [f64], c: &[f64], top: &[f64]) {
     floor_values_portable(g, c, top);
 }
 
