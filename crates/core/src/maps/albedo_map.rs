@@ -32,7 +32,7 @@ use crate::error::{CoreError, Result};
 use crate::maps::Atlas;
 use crate::maps::albedo_field::FieldRequest;
 use crate::maps::albedo_field::{eval_row, variances};
-use crate::maps::exact_albedos::RuleRows;
+use crate::maps::exact_albedos::{RuleRows, pixel_terms};
 use crate::maps::lattice::AlbedoLattice;
 pub use crate::maps::view::View;
 use crate::model::blend::pass_weights::floor_of;
@@ -41,7 +41,6 @@ use crate::model::blend::plausible_budget::convex_weights_at;
 use crate::model::blend::soft_floor::floor_rows;
 use crate::progress::{NoProgress, Progress};
 use crate::simd::dot;
-use crate::simd::fastexp;
 
 pub use crate::maps::exact_albedos::DEFAULT_SAMPLES;
 
@@ -463,14 +462,7 @@ impl Atlas {
                         for (px, o) in out.iter_mut().enumerate() {
                             let col = &vbuf[px * r..(px + 1) * r];
                             // Element-wise first (vectorises), then a fixed-order sum.
-                            let it = terms.iter_mut().zip(mean).zip(weight).zip(col);
-                            if exponential {
-                                it.for_each(|(((o, m), w), t)| {
-                                    *o = w * (fastexp::exp(m + t) - 1.0).max(0.0)
-                                });
-                            } else {
-                                it.for_each(|(((o, m), w), t)| *o = w * (m + t).max(0.0));
-                            }
+                            pixel_terms(&mut terms, mean, weight, col, exponential);
                             let mut start = 0;
                             for (ch, &end) in ends.iter().enumerate() {
                                 o[ch] = sum4(&terms[start..end]) as f32;

@@ -375,6 +375,53 @@ fn add_row_portable(acc: &mut [f64], t: &[f64], mu: f64, wt: f64, exponential: b
     }
 }
 
+/// Each quadrature row's share of a pixel's albedo, element-wise:
+/// `w * max(0, e^(m + t) - 1)` under an exponential inverse transform,
+/// `w * max(0, m + t)` under a linear one; in code compiled for the widest
+/// vectors the CPU has (the same bits on every path).
+pub(crate) fn pixel_terms(
+    terms: &mut [f64],
+    mean: &[f64],
+    weight: &[f64],
+    col: &[f64],
+    exponential: bool,
+) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if crate::simd::has_avx512f() {
+            // SAFETY: the CPU has AVX-512F (checked just above).
+            return unsafe { pixel_terms_avx512(terms, mean, weight, col, exponential) };
+        }
+        if crate::simd::has_avx2() {
+            // SAFETY: the CPU has AVX2 (checked just above).
+            return unsafe { pixel_terms_avx2(terms, mean, weight, col, exponential) };
+        }
+    }
+    pixel_terms_portable(terms, mean, weight, col, exponential);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2")]
+fn pixel_terms_avx512(t: &mut [f64], m: &[f64], w: &[f64], col: &[f64], exponential: bool) {
+    pixel_terms_portable(t, m, w, col, exponential);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn pixel_terms_avx2(t: &mut [f64], m: &[f64], w: &[f64], col: &[f64], exponential: bool) {
+    pixel_terms_portable(t, m, w, col, exponential);
+}
+
+#[inline(always)]
+fn pixel_terms_portable(t: &mut [f64], m: &[f64], w: &[f64], col: &[f64], exponential: bool) {
+    let it = t.iter_mut().zip(m).zip(w).zip(col);
+    if exponential {
+        it.for_each(|(((o, m), w), t)| *o = w * (fastexp::exp(m + t) - 1.0).max(0.0));
+    } else {
+        it.for_each(|(((o, m), w), t)| *o = w * (m + t).max(0.0));
+    }
+}
+
 /// A worker's buffers for [`Atlas::exact_albedos`]: a block of rows and
 /// its values at the nodes (kept between calls, so a pass allocates nothing).
 #[derive(Default)]
@@ -392,6 +439,33 @@ thread_local! {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_pixels_terms_are_the_same_bits_on_every_path() {
+        let mut rng = brdf_merl::synth::SplitMix64::new(11);
+        for len in [1, 5, 16, 270] {
+            let col: Vec<f64> = (0..len).map(|_| rng.range(-30.0, 8.0)).collect();
+            let mean: Vec<f64> = (0..len).map(|_| rng.range(-2.0, 2.0)).collect();
+            let weight: Vec<f64> = (0..len).map(|_| rng.range(0.0, 1e-3)).collect();
+            for exponential in [true, false] {
+                let want: Vec<u64> = (0..len)
+                    .map(|k| {
+                        let (m, t) = (mean[k], col[k]);
+                        let v = if exponential {
+                            (fastexp::exp(m + t) - 1.0).max(0.0)
+                        } else {
+                            (m + t).max(0.0)
+                        };
+                        (weight[k] * v).to_bits()
+                    })
+                    .collect();
+                let mut got = vec![0.0; len];
+                pixel_terms(&mut got, &mean, &weight, &col, exponential);
+                let got: Vec<u64> = got.iter().map(|x| x.to_bits()).collect();
+                assert_eq!(got, want, "{len} {exponential}");
+            }
+        }
+    }
 
     #[test]
     fn a_row_adds_the_same_bits_on_every_path() {

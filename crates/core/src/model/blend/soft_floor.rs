@@ -134,12 +134,7 @@ pub(crate) fn caps<T: Copy + PartialOrd + Into<f64>>(
 /// [`caps`] in AVX-512 code (a maximum is exact: the same values).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx2")]
-fn caps_avx512<T: Copy + PartialOrd + Into<f64>>(
-    z: &[T],
-    n: usize,
-    mean: &[f64],
-    out: &mut [f64],
-) {
+fn caps_avx512<T: Copy + PartialOrd + Into<f64>>(z: &[T], n: usize, mean: &[f64], out: &mut [f64]) {
     caps_portable(z, n, mean, out);
 }
 
@@ -209,10 +204,23 @@ fn floor_values_portable(g: &mut [f64], c: &[f64], top: &[f64]) {
 /// ([`reach_cap`]; the map's per-pixel rule: one row a quadrature bin).
 pub(crate) fn floor_rows(t: &mut [f64], c: &[f64], mean: &[f64], top: &[f64], r: &[f64]) {
     #[cfg(target_arch = "x86_64")]
-    if crate::simd::has_avx2_fma() {
-        // SAFETY: the CPU has AVX2 and FMA (checked just above).
-        return unsafe { floor_rows_fma(t, c, mean, top, r) };
+    {
+        if crate::simd::has_avx512f() && crate::simd::has_avx2_fma() {
+            // SAFETY: the CPU has AVX-512F, AVX2 and FMA (checked just above).
+            return unsafe { floor_rows_avx512(t, c, mean, top, r) };
+        }
+        if crate::simd::has_avx2_fma() {
+            // SAFETY: the CPU has AVX2 and FMA (checked just above).
+            return unsafe { floor_rows_fma(t, c, mean, top, r) };
+        }
     }
+    floor_rows_portable(t, c, mean, top, r);
+}
+
+/// [`floor_rows`] in eight lanes (the per-pixel map's floor); the same bits.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2,fma")]
+fn floor_rows_avx512(t: &mut [f64], c: &[f64], mean: &[f64], top: &[f64], r: &[f64]) {
     floor_rows_portable(t, c, mean, top, r);
 }
 
