@@ -54,6 +54,15 @@ pub use cleanup::{
 use cleanup::{create_temp, create_unnamed, forget, mark_committed};
 pub use scratch::scratch_file;
 
+/// A new file at `path` (which must not exist), open for reading and writing.
+fn open_new(path: &Path) -> io::Result<File> {
+    File::options()
+        .read(true)
+        .write(true)
+        .create_new(true)
+        .open(path)
+}
+
 /// Write `path` atomically: `fill` writes the whole content into a buffered
 /// temporary file, which is then synced and renamed over `path`.
 pub fn write_atomic<F>(path: &Path, fill: F) -> io::Result<()>
@@ -220,13 +229,7 @@ impl PendingFile {
                 done: false,
             });
         }
-        let (tmp, file) = create_temp(target, |tmp| {
-            File::options()
-                .read(true)
-                .write(true)
-                .create_new(true)
-                .open(tmp)
-        })?;
+        let (tmp, file) = create_temp(target, open_new)?;
         Ok(PendingFile {
             tmp: Some(tmp),
             target: target.to_path_buf(),

@@ -5,6 +5,7 @@ use std::io;
 use std::path::Path;
 
 use crate::cleanup::{create_temp, forget};
+use crate::open_new;
 use crate::unnamed;
 
 /// A scratch file of `len` bytes for work a run throws away (a report's
@@ -29,13 +30,7 @@ fn scratch(dir: &Path, name: &str, len: u64, in_memory: bool) -> io::Result<File
     let file = match unnamed::open_unnamed(dir)? {
         Some(file) => file,
         None => {
-            let (tmp, file) = create_temp(&dir.join(name), |tmp| {
-                File::options()
-                    .read(true)
-                    .write(true)
-                    .create_new(true)
-                    .open(tmp)
-            })?;
+            let (tmp, file) = create_temp(&dir.join(name), open_new)?;
             std::fs::remove_file(&tmp)?;
             forget(&tmp);
             file

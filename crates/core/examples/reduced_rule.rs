@@ -27,15 +27,9 @@ fn errors(got: &[[f64; 3]], want: &[[f64; 3]]) -> (f64, f64) {
 }
 
 fn points(count: usize, seed: u64, v: View) -> Vec<[f64; 2]> {
-    let mut s = seed;
-    let mut next = || {
-        s = s
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (s >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = brdf_merl::synth::SplitMix64::new(seed);
     (0..count)
-        .map(|_| [v.x0 + (v.x1 - v.x0) * next(), v.y0 + (v.y1 - v.y0) * next()])
+        .map(|_| [rng.range(v.x0, v.x1), rng.range(v.y0, v.y1)])
         .collect()
 }
 

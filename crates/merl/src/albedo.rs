@@ -157,11 +157,13 @@ impl Quadrature {
         Quadrature::compact(dims, rule)
     }
 
+    /// The rule of a weight per bin: the bins of nonzero weight (a reduced
+    /// rule's can be negative).
     fn compact(dims: Dims, dense: Vec<f64>) -> Quadrature {
         let (bins, weights) = dense
             .iter()
             .enumerate()
-            .filter(|(_, w)| **w > 0.0)
+            .filter(|(_, w)| **w != 0.0)
             .map(|(b, w)| (b as u32, *w))
             .unzip();
         Quadrature {
@@ -234,17 +236,7 @@ impl Quadrature {
                 }
             }
         }
-        let (bins, weights) = rule
-            .iter()
-            .enumerate()
-            .filter(|(_, w)| **w != 0.0)
-            .map(|(b, w)| (b as u32, *w))
-            .unzip();
-        Quadrature {
-            dims,
-            bins,
-            weights,
-        }
+        Quadrature::compact(dims, rule)
     }
 
     /// Monte Carlo sampling of this rule: `samples` bins drawn at random
