@@ -341,7 +341,7 @@ fn rules(w: &mut dyn Write, r: &Results) -> io::Result<()> {
          the store, against the dense rule's, relative to the reference's largest channel. \
          Time: the pass divided by the points. The reconstructed table has kinks (the clamp \
          at 0, the soft floor's largest material), so interpolants of higher order gain \
-         little over the nodes' piecewise-constant rule; `map-rules.csv` has the figures.\n",
+         little for the rows they read; `map-rules.csv` has the figures.\n",
         r.rule_points
     )?;
     head(

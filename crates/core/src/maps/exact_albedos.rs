@@ -24,9 +24,11 @@ use crate::simd::fold::{GROUPS, ordered_blocks};
 pub const DEFAULT_SAMPLES: usize = 256;
 
 /// The map's exact nodes read every this many phi_d bins
-/// ([`Quadrature::every_phi_d`]; at the MERL resolution within 0.05% of the
-/// dense albedo on sharp metals and their blends, and on the default
-/// material of the 100 NBRDF-derived materials, tested).
+/// ([`Quadrature::every_phi_d`]): at the MERL resolution within 0.05% of the
+/// dense albedo on sharp metals and their blends and on the default
+/// material of 8 NBRDF-derived materials (tested), within 0.17% of the
+/// largest channel at 128 random points of the default view of the 100
+/// (docs/performance.md, "Exact-albedo rules").
 pub const NODE_PHI_D_STEP: usize = 8;
 
 /// Rows of the store a step of the exact pass multiplies at once.
@@ -110,8 +112,9 @@ impl Atlas {
     /// The rows of the rule the map's exact nodes (albedo fields, prepared
     /// lattices) are integrated with: the dense rule on every
     /// [`NODE_PHI_D_STEP`]-th phi_d bin where the grid has at least 90
-    /// (an eighth of the rows at the MERL resolution, within 0.05% of the
-    /// dense rule), the dense rule itself on coarser grids; built once.
+    /// (an eighth of the rows at the MERL resolution, within 0.17% of the
+    /// dense rule, see [`NODE_PHI_D_STEP`]), the dense rule itself on
+    /// coarser grids; built once.
     pub(crate) fn node_rows(&self) -> &RuleRows {
         self.node_rows.get_or_init(|| {
             let step = if self.model.dims().phi_d >= 90 {
