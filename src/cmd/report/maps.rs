@@ -93,7 +93,11 @@ pub fn rules(model: &Atlas, plan: &Plan, r: &mut Results) -> Result<(), Error> {
     let step = NODE_PHI_D_STEP;
     let rules: Vec<(String, Quadrature)> = vec![
         (
-            format!("every {step}th phi_d bin, its cell's weight (the map's nodes)"),
+            format!("cubic interpolant, every {step}th phi_d bin (the map's nodes)"),
+            model.reduced_rule(1, step, true),
+        ),
+        (
+            format!("every {step}th phi_d bin, its cell's weight"),
             dense.every_phi_d(step),
         ),
         (

@@ -54,7 +54,9 @@ pub(super) const CHUNK: usize = 256;
 const FORMAT: &str = "brdf-atlas lattice";
 /// 2: the floor's cap reaches only as far as keeps every directional
 /// albedo under 1 (a lattice of version 1 holds albedos of the earlier cap).
-const VERSION: u32 = 2;
+/// 3: the nodes integrate the cubic interpolant of every 8th phi_d bin
+/// (version 2's took each cell's weight on its middle bin).
+const VERSION: u32 = 3;
 
 /// What reading the lattice beside a model gave: the lattice, none, or why
 /// it cannot be used.
