@@ -10,7 +10,7 @@
 
 use std::time::Instant;
 
-use brdf_atlas_core::map_error::reference_albedo;
+use brdf_atlas_core::map_error::{map_error, reference_albedo};
 use brdf_atlas_core::{Atlas, BlendRule, MapRequest, Model, View};
 
 const SIDE: usize = 1024;
@@ -41,24 +41,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let t = Instant::now();
         atlas.map(MapRequest::new(SIDE, SIDE).view(view))?;
         let again = t.elapsed().as_secs_f64();
-        let mut s = 12_345u64;
-        let mut next = || {
-            s = s
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            ((s >> 33) as usize) % SIDE
-        };
-        let mut worst = 0.0f64;
-        for _ in 0..64 {
-            let (x, y) = (next(), next());
-            let at = view.pixel_to_latent(x as f64, y as f64, SIDE, SIDE);
-            let want = reference_albedo(&atlas, &at, BlendRule::Floor, atlas.albedo_rule())?;
-            let got = map.rgb[y * SIDE + x];
-            let scale = want.iter().fold(1e-12f64, |a, v| a.max(v.abs()));
-            for k in 0..3 {
-                worst = worst.max((f64::from(got[k]) - want[k]).abs() / scale);
-            }
-        }
+        let mut rng = brdf_merl::synth::SplitMix64::new(12_345);
+        let pixels: Vec<(usize, usize)> = (0..64)
+            .map(|_| {
+                let mut side = || (rng.next_u64() % SIDE as u64) as usize;
+                (side(), side())
+            })
+            .collect();
+        let reference = pixels
+            .iter()
+            .map(|&(x, y)| {
+                let at = view.pixel_to_latent(x as f64, y as f64, SIDE, SIDE);
+                reference_albedo(&atlas, &at, BlendRule::Floor, atlas.albedo_rule())
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let (worst, _) = map_error(&map, &pixels, &reference);
         println!(
             "1/{zoom} of the view at ({}, {}): {:?}; first map {first:.3} s, again {again:.3} s; worst of 64 pixels {:.4}%",
             c[0],

@@ -200,9 +200,9 @@ impl Quadrature {
     /// pi there). So each bin's weight is shared among the kept bins whose
     /// interpolant reaches it, in the interpolant's proportions. The first
     /// and last theta_d bins are always kept. A bin whose interpolant
-    /// would read a bin this rule gives no weight (below the horizon: its
-    /// value need not belong to the same smooth surface) keeps its own
-    /// weight and is read itself. Cubic weights can be negative; the rule
+    /// would read a bin `readable` refuses (one unmeasured in the tables
+    /// integrated: its value need not belong to the same smooth surface)
+    /// keeps its own weight and is read itself. Cubic weights can be negative; the rule
     /// stays exact for any table that is cubic between the kept bins.
     /// Steps of 0 or 1 keep every bin along their axis.
     pub fn reduced(
@@ -213,10 +213,6 @@ impl Quadrature {
         readable: impl Fn(usize) -> bool,
     ) -> Quadrature {
         let dims = self.dims;
-        let mut dense = vec![0.0f64; dims.bins()];
-        for (&b, &w) in self.bins.iter().zip(&self.weights) {
-            dense[b as usize] = w;
-        }
         let along_d = Stencils::new(dims.theta_d, theta_d_step, false, cubic);
         let along_p = Stencils::new(dims.phi_d, phi_d_step, true, cubic);
         let mut rule = vec![0.0f64; dims.bins()];

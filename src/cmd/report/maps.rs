@@ -5,7 +5,7 @@
 
 use std::time::Instant;
 
-use brdf_atlas_core::map_error::map_error;
+use brdf_atlas_core::map_error::{albedo_error, map_error};
 use brdf_atlas_core::{
     AlbedoMethod, AlbedoRequest, Atlas, BlendRule, DEFAULT_SAMPLES, Integration, LATTICE_TOLERANCE,
     NODE_PHI_D_STEP, NoProgress, View,
@@ -125,21 +125,13 @@ pub fn rules(model: &Atlas, plan: &Plan, r: &mut Results) -> Result<(), Error> {
         let t = Instant::now();
         let got = model.exact_albedos(&points, request.integration(Integration::Rule(&rule)))?;
         let per_point = t.elapsed() / count;
-        let (mut max_err, mut sum) = (0.0f64, 0.0f64);
-        for (g, want) in got.iter().zip(&reference) {
-            let scale = want.iter().fold(1e-12f64, |a, v| a.max(v.abs()));
-            for c in 0..3 {
-                let e = (g[c] - want[c]).abs() / scale;
-                max_err = max_err.max(e);
-                sum += e;
-            }
-        }
+        let (max_err, mean_err) = albedo_error(&got, &reference);
         r.rules.push(RuleRow {
             rule: name,
             bins: rule.len(),
             per_point,
             max_err,
-            mean_err: sum / (3 * got.len().max(1)) as f64,
+            mean_err,
         });
     }
     r.rule_points = points.len();

@@ -365,15 +365,27 @@ fn add_row_avx2(acc: &mut [f64], t: &[f64], mu: f64, wt: f64, exponential: bool)
     add_row_portable(acc, t, mu, wt, exponential);
 }
 
+/// The reflectance of transformed value `t` (mean included), clamped at 0:
+/// `max(0, e^t - 1)` under an exponential inverse transform, `max(0, t)`
+/// under a linear one; the inverse transform's scale is in the weights.
+#[inline(always)]
+fn clamped(t: f64, exponential: bool) -> f64 {
+    if exponential {
+        (fastexp::exp(t) - 1.0).max(0.0)
+    } else {
+        t.max(0.0)
+    }
+}
+
 #[inline(always)]
 fn add_row_portable(acc: &mut [f64], t: &[f64], mu: f64, wt: f64, exponential: bool) {
     if exponential {
         for (o, t) in acc.iter_mut().zip(t) {
-            *o += wt * (fastexp::exp(mu + t) - 1.0).max(0.0);
+            *o += wt * clamped(mu + t, true);
         }
     } else {
         for (o, t) in acc.iter_mut().zip(t) {
-            *o += wt * (mu + t).max(0.0);
+            *o += wt * clamped(mu + t, false);
         }
     }
 }
@@ -419,9 +431,9 @@ fn pixel_terms_avx2(t: &mut [f64], m: &[f64], w: &[f64], col: &[f64], exponentia
 fn pixel_terms_portable(t: &mut [f64], m: &[f64], w: &[f64], col: &[f64], exponential: bool) {
     let it = t.iter_mut().zip(m).zip(w).zip(col);
     if exponential {
-        it.for_each(|(((o, m), w), t)| *o = w * (fastexp::exp(m + t) - 1.0).max(0.0));
+        it.for_each(|(((o, m), w), t)| *o = w * clamped(m + t, true));
     } else {
-        it.for_each(|(((o, m), w), t)| *o = w * (m + t).max(0.0));
+        it.for_each(|(((o, m), w), t)| *o = w * clamped(m + t, false));
     }
 }
 

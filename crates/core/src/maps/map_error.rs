@@ -28,15 +28,24 @@ pub fn reference_albedo(
 /// Largest and mean error of `map` at `pixels` (`(px, py)`) against
 /// `reference` albedos, each relative to the reference's largest channel.
 pub fn map_error(map: &AlbedoMap, pixels: &[(usize, usize)], reference: &[[f64; 3]]) -> (f64, f64) {
+    let got: Vec<[f64; 3]> = pixels
+        .iter()
+        .map(|&(px, py)| map.rgb[py * map.width + px].map(f64::from))
+        .collect();
+    albedo_error(&got, reference)
+}
+
+/// Largest and mean error of albedos `got` against `reference`, each
+/// relative to the reference's largest channel (at least 1e-6).
+pub fn albedo_error(got: &[[f64; 3]], reference: &[[f64; 3]]) -> (f64, f64) {
     let (mut worst, mut sum) = (0.0f64, 0.0f64);
-    for (&(px, py), r) in pixels.iter().zip(reference) {
-        let got = map.rgb[py * map.width + px];
+    for (g, r) in got.iter().zip(reference) {
         let scale = r.iter().fold(1e-6f64, |a, v| a.max(v.abs()));
         for c in 0..3 {
-            let e = (got[c] as f64 - r[c]).abs() / scale;
+            let e = (g[c] - r[c]).abs() / scale;
             worst = worst.max(e);
             sum += e;
         }
     }
-    (worst, sum / (3 * pixels.len().max(1)) as f64)
+    (worst, sum / (3 * got.len().max(1)) as f64)
 }
