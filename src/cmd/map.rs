@@ -183,6 +183,16 @@ pub fn draw(
             model.file().transform.name(),
             100.0 * estimate
         ),
+        AlbedoMethod::SampledField {
+            samples,
+            nodes,
+            patches,
+            estimate,
+        } => format!(
+            "sampled albedo field of the {} transform: albedos integrated with {samples} quadrature samples at {nodes} nodes, a polynomial on {patches} patches (error estimate {:.2}%; `brdf-atlas prepare` for exact albedos)",
+            model.file().transform.name(),
+            100.0 * estimate
+        ),
         AlbedoMethod::Lattice {
             nodes,
             tolerance,

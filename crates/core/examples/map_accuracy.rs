@@ -57,6 +57,14 @@ fn describe(method: &AlbedoMethod) -> String {
             patches,
             estimate,
         } => format!("field: {nodes} nodes, {patches} patches, estimate {estimate:.1e}"),
+        AlbedoMethod::SampledField {
+            samples,
+            nodes,
+            patches,
+            estimate,
+        } => format!(
+            "sampled field: {samples} samples, {nodes} nodes, {patches} patches, estimate {estimate:.1e}"
+        ),
         AlbedoMethod::Quadrature { samples, bins } => format!("quadrature {samples} ({bins} bins)"),
         AlbedoMethod::Lattice {
             nodes,

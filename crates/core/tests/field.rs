@@ -135,6 +135,14 @@ fn field_map_is_within_one_percent_of_the_dense_rule_at_every_zoom() {
                 assert!(worst <= 0.25, "view {view:?}: worst error {worst:.3e}");
                 assert_eq!(variance_error(&model, &map), 0.0);
             }
+            // Exact nodes over budget: nodes of the sampled rule, whose
+            // error is the per-pixel rule's kind (tested on its own below).
+            AlbedoMethod::SampledField { samples, .. } => {
+                assert_eq!(samples, brdf_atlas_core::FIELD_SAMPLES);
+                assert!(worst <= 0.25, "view {view:?}: worst error {worst:.3e}");
+                let verr = variance_error(&model, &map);
+                assert!(verr <= 0.01, "view {view:?}: variance off by {verr:.3e}");
+            }
             AlbedoMethod::Linear | AlbedoMethod::Lattice { .. } => {
                 panic!("a log map without a prepared map is a field or per pixel")
             }
@@ -422,5 +430,56 @@ fn a_cancelled_map_stops_caches_nothing_and_the_next_one_is_whole() {
             assert_eq!(next.rgb, reference.rgb, "{samples:?} after {after}");
             assert_eq!(next.variance, reference.variance);
         }
+    }
+}
+
+/// A sampled field holds its own rule's albedos: at random points of the
+/// view, the field against that quadrature rule applied to the full
+/// reconstruction at each point (an independent pass, point by point),
+/// within the field's error estimate; a second request is answered from
+/// the atlas's cache.
+#[test]
+fn a_sampled_field_holds_its_rules_albedos() {
+    let tmp = tempfile::tempdir().unwrap();
+    let model =
+        brdf_atlas_core::Atlas::new(Model::open(fit(tmp.path(), 12, TransformKind::Log)).unwrap());
+    let samples = 64;
+    let rule = Quadrature::with_samples_shaped(model.albedo_rule(), samples, model.shape());
+    for view in [
+        View::default(),
+        View {
+            x0: -3.0,
+            x1: 3.0,
+            y0: -3.0,
+            y1: 3.0,
+        },
+    ] {
+        let request = brdf_atlas_core::FieldRequest::new(view, 1 << 20);
+        let field = model.sampled_field(request, samples).unwrap().unwrap();
+        assert!(field.nodes() >= 25, "{}", field.nodes());
+        let mut rng = synth::SplitMix64::new(5);
+        let mut worst = 0.0f64;
+        for _ in 0..24 {
+            let x = [rng.range(view.x0, view.x1), rng.range(view.y0, view.y1)];
+            let want = reference_albedo(&model, &x, BlendRule::Floor, &rule).unwrap();
+            let (got, _) = field.at(x);
+            let scale = want.iter().fold(1e-9f64, |a, v| a.max(v.abs()));
+            for c in 0..3 {
+                worst = worst.max((got[c] - want[c]).abs() / scale);
+            }
+        }
+        // Chebyshev interpolation converges geometrically: well inside its
+        // estimate where that met the tolerance.
+        let bound = field
+            .estimate()
+            .max(brdf_atlas_core::albedo_field::ALBEDO_TOLERANCE);
+        assert!(
+            worst <= bound,
+            "{view:?}: {worst:.2e} off its rule, estimate {:.2e}",
+            field.estimate()
+        );
+        // The same request is answered from the cache.
+        let again = model.sampled_field(request, samples).unwrap().unwrap();
+        assert!(std::sync::Arc::ptr_eq(&field, &again));
     }
 }

@@ -193,6 +193,10 @@ pub fn methods(model: &Atlas, plan: &Plan, r: &mut Results) -> Result<(), Error>
             let (max_err, mean_err) = map_error(&map, &pixels, &reference);
             let (method, field) = match map.method {
                 AlbedoMethod::Field { nodes, .. } => (format!("field, {nodes} exact nodes"), true),
+                AlbedoMethod::SampledField { samples, nodes, .. } => (
+                    format!("sampled field, {nodes} nodes of {samples} samples"),
+                    true,
+                ),
                 AlbedoMethod::Lattice { nodes, .. } => (format!("lattice, {nodes} nodes"), true),
                 AlbedoMethod::Quadrature { samples, .. } => {
                     (format!("per pixel, {samples} samples"), false)

@@ -30,7 +30,7 @@ use crate::data::store::Rows;
 use crate::dense::product::matmul;
 use crate::error::{CoreError, Result};
 use crate::maps::Atlas;
-use crate::maps::albedo_field::FieldRequest;
+use crate::maps::albedo_field::{FIELD_SAMPLES, FieldRequest};
 use crate::maps::albedo_field::{eval_row, variances};
 use crate::maps::exact_albedos::{RuleRows, pixel_terms};
 use crate::maps::lattice::AlbedoLattice;
@@ -59,6 +59,23 @@ pub enum AlbedoMethod {
         /// Patches of the albedo polynomial.
         patches: usize,
         /// The refinement's error estimate, relative to a node's largest channel.
+        estimate: f64,
+    },
+    /// A polynomial through albedos integrated with a sampled quadrature
+    /// rule (the per-pixel rule's kind, with more samples) at the nodes of
+    /// grids on patches of the view's domain ([`Atlas::sampled_field`]):
+    /// what a map takes when exact nodes would cost too much, as accurate
+    /// as integrating every pixel with that rule and several times faster.
+    #[serde(rename = "sampled-field")]
+    SampledField {
+        /// Samples of the nodes' rule.
+        samples: usize,
+        /// Nodes the field holds.
+        nodes: usize,
+        /// Patches of the albedo polynomial.
+        patches: usize,
+        /// The refinement's error estimate against the nodes' own rule,
+        /// relative to a node's largest channel.
         estimate: f64,
     },
     /// The cubic of the prepared map's adaptive lattice of exact albedos
@@ -339,15 +356,26 @@ impl Atlas {
         {
             return Ok(map);
         }
+        // The exact field where it fits its budget, else the sampled one
+        // where that fits its own; else every pixel is integrated.
         let field = match samples {
             None if !linear => {
                 let budget = self.field_budget(width * height, DEFAULT_SAMPLES);
-                self.field(FieldRequest {
+                let request = FieldRequest {
                     view,
                     budget,
                     rule,
                     progress,
-                })?
+                };
+                match self.field(request)? {
+                    Some(field) => Some((field, None)),
+                    None => {
+                        let budget = self.sampled_field_budget(width * height);
+                        let request = FieldRequest { budget, ..request };
+                        self.sampled_field(request, FIELD_SAMPLES)?
+                            .map(|field| (field, Some(FIELD_SAMPLES)))
+                    }
+                }
             }
             _ => None,
         };
@@ -356,7 +384,7 @@ impl Atlas {
             s => s,
         };
         let method = match (field, samples) {
-            (Some(field), _) => {
+            (Some((field, sampled)), _) => {
                 let xs: Vec<f64> = (0..width)
                     .map(|px| view.pixel_to_latent(px as f64, 0.0, width, height)[0])
                     .collect();
@@ -376,10 +404,18 @@ impl Atlas {
                         });
                         progress.advance(1);
                     });
-                AlbedoMethod::Field {
-                    nodes: field.nodes(),
-                    patches: field.patches(),
-                    estimate: field.estimate(),
+                match sampled {
+                    None => AlbedoMethod::Field {
+                        nodes: field.nodes(),
+                        patches: field.patches(),
+                        estimate: field.estimate(),
+                    },
+                    Some(samples) => AlbedoMethod::SampledField {
+                        samples,
+                        nodes: field.nodes(),
+                        patches: field.patches(),
+                        estimate: field.estimate(),
+                    },
                 }
             }
             (None, None) => {
