@@ -109,6 +109,8 @@ pub const PLAN_FACTOR: usize = 4;
 /// samples is 6.6% and 1.0% off and takes three times as long
 /// (docs/performance.md, "Sampled fields").
 pub const FIELD_SAMPLES: usize = 1024;
+/// Nodes of a sampled field integrated in one pass over its rule's rows.
+const SAMPLED_CHUNK: usize = 1024;
 /// Fields a model keeps for later maps.
 pub const FIELD_CACHE: usize = 8;
 
@@ -306,9 +308,9 @@ impl Atlas {
     /// [`DEFAULT_SAMPLES`](crate::DEFAULT_SAMPLES) would, and at least
     /// [`MIN_NODES`].
     pub fn sampled_field_budget(&self, pixels: usize) -> usize {
-        let rows = self.sampled_rows(FIELD_SAMPLES).rows.rows.len().max(1) as f64;
+        let rows = self.plan_rows().rows.len() + self.sampled_rows(FIELD_SAMPLES).rows.rows.len();
         let per_pixel = 3.0 * crate::DEFAULT_SAMPLES as f64;
-        ((pixels as f64 * per_pixel / rows) as usize).max(MIN_NODES)
+        ((pixels as f64 * per_pixel / rows.max(1) as f64) as usize).max(MIN_NODES)
     }
 
     /// Plan the field of `domain`: the same refinement as
@@ -371,9 +373,8 @@ impl Atlas {
         if let Some(f) = cache.find(cached) {
             return Ok(f.field.clone());
         }
-        let rows = self.sampled_rows(samples.max(1));
         let field = self
-            .build_with(domain, budget, &rows, floor, progress)?
+            .build_sampled(domain, budget, samples.max(1), floor, progress)?
             .map(Arc::new);
         let entry = Arc::new(Cached {
             domain,
@@ -449,6 +450,55 @@ impl Atlas {
         else {
             return Ok(None);
         };
+        Ok(Some(self.with_variance(domain, albedo, nodes)?))
+    }
+
+    /// The sampled field of `domain` ([`Atlas::sampled_field`]): the
+    /// patches and grids are those the plan's refinement (on the per-pixel
+    /// rule's rows, [`DEFAULT_SAMPLES`](crate::DEFAULT_SAMPLES) samples,
+    /// each node a fraction of a `samples`-sample node's cost) settles on,
+    /// and their nodes then take the `samples`-sample rule's values, all
+    /// in one pass; the estimate is the plan's. `None` if the plan needs
+    /// more than `budget` nodes.
+    fn build_sampled(
+        &self,
+        domain: View,
+        budget: usize,
+        samples: usize,
+        floor: bool,
+        progress: &dyn Progress,
+    ) -> Result<Option<AlbedoField>> {
+        let plan = self.albedo_patches(domain, budget, self.plan_rows(), floor, progress)?;
+        let Some((mut albedo, nodes)) = plan else {
+            return Ok(None);
+        };
+        if samples != crate::DEFAULT_SAMPLES {
+            let points: Vec<[f64; 2]> = albedo
+                .iter()
+                .flat_map(|p| grid_points(&p.xs, &p.ys))
+                .collect();
+            let rows = self.sampled_rows(samples);
+            // A few thousand points a pass: the rows are few, and a pass's
+            // values at every point of a block of rows stay in cache.
+            let mut values = Vec::with_capacity(points.len());
+            for chunk in points.chunks(SAMPLED_CHUNK) {
+                if progress.cancelled() {
+                    return Err(CoreError::Cancelled);
+                }
+                values.extend(self.albedos_over(&rows, chunk, floor)?);
+            }
+            let mut values = values.iter().flatten().copied();
+            for p in &mut albedo {
+                for v in &mut p.values {
+                    *v = values.next().expect("a value a node");
+                }
+            }
+        }
+        Ok(Some(self.with_variance(domain, albedo, nodes)?))
+    }
+
+    /// A field of `domain` from its albedo patches, with the variance's.
+    fn with_variance(&self, domain: View, albedo: Vec<Patch>, nodes: usize) -> Result<AlbedoField> {
         let variance = refine(
             domain,
             1,
@@ -458,12 +508,12 @@ impl Atlas {
             &mut |pts| Ok(Some(self.exact_variances(pts))),
         )?
         .expect("the variance has no budget");
-        Ok(Some(AlbedoField {
+        Ok(AlbedoField {
             domain,
             albedo,
             variance,
             nodes,
-        }))
+        })
     }
 }
 
@@ -622,24 +672,28 @@ fn lobatto(a: f64, b: f64, n: usize) -> Vec<f64> {
 /// The Lagrange basis of the Lobatto grid `grid` at `x` (barycentric form,
 /// weights `(-1)^j`, halved at the ends): `sum_j l_j f_j` is the interpolant.
 fn lagrange(grid: &[f64], x: f64) -> Vec<f64> {
+    let mut l = Vec::with_capacity(grid.len());
+    lagrange_into(grid, x, &mut l);
+    l
+}
+
+/// [`lagrange`] into `l` (its old contents dropped), allocating nothing
+/// once `l` has the room: the per-pixel form.
+fn lagrange_into(grid: &[f64], x: f64, l: &mut Vec<f64>) {
     let n = grid.len();
+    l.clear();
     if let Some(j) = grid.iter().position(|&g| g == x) {
-        let mut l = vec![0.0; n];
+        l.resize(n, 0.0);
         l[j] = 1.0;
-        return l;
+        return;
     }
-    let mut l: Vec<f64> = grid
-        .iter()
-        .enumerate()
-        .map(|(j, &g)| {
-            let w = if j == 0 || j == n - 1 { 0.5 } else { 1.0 };
-            let w = if j % 2 == 0 { w } else { -w };
-            w / (x - g)
-        })
-        .collect();
+    l.extend(grid.iter().enumerate().map(|(j, &g)| {
+        let w = if j == 0 || j == n - 1 { 0.5 } else { 1.0 };
+        let w = if j % 2 == 0 { w } else { -w };
+        w / (x - g)
+    }));
     let s: f64 = l.iter().sum();
     l.iter_mut().for_each(|v| *v /= s);
-    l
 }
 
 /// The patch holding `x`, or the nearest one (`x` just outside by rounding).
@@ -679,6 +733,7 @@ pub(crate) fn eval_row(
     mut write: impl FnMut(usize, &[f64]),
 ) {
     let mut px = 0;
+    let mut lx = Vec::new();
     // Pixels of a row fall in patches in runs (patches are rectangles).
     while px < xs.len() {
         let p = find(patches, [xs[px], y]);
@@ -695,8 +750,12 @@ pub(crate) fn eval_row(
             }
         }
         let mut out = vec![0.0f64; channels];
-        while px < xs.len() && std::ptr::eq(find(patches, [xs[px], y]), p) {
-            let lx = lagrange(&p.xs, xs[px]);
+        // The run goes on while the pixel is inside this patch (a pixel on
+        // the border of two is in either: both interpolate the same nodes'
+        // rule there), or while the nearest patch is still this one.
+        let inside = |x: f64| p.rect.x0 <= x && x <= p.rect.x1 && p.rect.y0 <= y && y <= p.rect.y1;
+        while px < xs.len() && (inside(xs[px]) || std::ptr::eq(find(patches, [xs[px], y]), p)) {
+            lagrange_into(&p.xs, xs[px], &mut lx);
             for (c, o) in out.iter_mut().enumerate() {
                 *o = dot::dot(&lx, &g[c * nx..(c + 1) * nx]);
             }
