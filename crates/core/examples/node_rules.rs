@@ -19,7 +19,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let fine = atlas.albedo_rule().clone();
     let shape = atlas.shape().to_vec();
     let mut rules: Vec<(String, Quadrature)> = Vec::new();
-    for s in [1024, 4096] {
+    for s in [256, 1024, 4096] {
         rules.push((
             format!("shaped {s}"),
             Quadrature::with_samples_shaped(&fine, s, &shape),

@@ -37,8 +37,10 @@ fn map_samples(samples: usize) -> Result<Option<usize>> {
 /// `samples` is the quadrature sample count per pixel; 0 means the library
 /// default: the albedo field (exact albedos at nodes, a polynomial between
 /// them, within 0.25% by its estimate; kept by the model, so later maps of
-/// the same region are fast) where it costs less than 256 samples a pixel,
-/// which are used otherwise. (The GP's map of a model in the raw transform
+/// the same region are fast) where it costs less than 256 samples a pixel;
+/// else the sampled field (the same polynomial through albedos integrated
+/// with 1024 samples at its nodes, a few per cent off at worst, also kept)
+/// where that costs less; else 256 samples a pixel. (The GP's map of a model in the raw transform
 /// is exact instead: the per-material albedos blended.) At most `BRDF_ATLAS_MAX_SAMPLES`.
 ///
 /// Ownership: `model` and `view` are borrowed; `buf` is caller-owned, `len`
