@@ -549,6 +549,16 @@ type Exact<'a> = dyn FnMut(&[[f64; 2]]) -> Result<Option<Vec<f64>>> + 'a;
 
 /// Patches covering `rect` whose interpolants meet `tol` (or are the finest
 /// grid at the deepest cut); `None` when `exact` refuses (its budget is spent).
+///
+/// Each patch starts from the grid of `levels[0]` points a side and takes
+/// the next grid (which holds the previous one) until its interpolant,
+/// compared with the values at the new nodes, is within `tol`; a patch
+/// far off after a doubling, or at its finest grid, is cut in four (down to
+/// [`MAX_DEPTH`] cuts). Every patch's decisions depend on its own values
+/// alone, so the patches refine side by side: each round asks `exact` for
+/// the nodes every patch still refining needs, in one call (one pass over
+/// the store for all of them), and the patches come out in the order of
+/// refining one patch after another (its quarters in place of a cut patch).
 fn refine(
     rect: View,
     channels: usize,
@@ -557,88 +567,157 @@ fn refine(
     depth: usize,
     exact: &mut Exact<'_>,
 ) -> Result<Option<Vec<Patch>>> {
-    let mut patch = Patch {
+    /// A patch being refined: where it stands in the depth-first order,
+    /// its depth, and its grid of `levels[level]` points a side (none yet
+    /// before the first round).
+    struct Open {
+        key: Vec<u8>,
+        depth: usize,
+        rect: View,
+        grid: Option<(usize, Patch)>,
+    }
+    let start = Open {
+        key: Vec::new(),
+        depth,
         rect,
-        xs: lobatto(rect.x0, rect.x1, levels[0]),
-        ys: lobatto(rect.y0, rect.y1, levels[0]),
-        values: Vec::new(),
-        estimate: f64::INFINITY,
+        grid: None,
     };
-    let Some(values) = exact(&grid_points(&patch.xs, &patch.ys))? else {
-        return Ok(None);
-    };
-    patch.values = values;
-    for &size in &levels[1..] {
-        let from = patch.xs.len();
-        let xs = lobatto(rect.x0, rect.x1, size);
-        let ys = lobatto(rect.y0, rect.y1, size);
-        // The new nodes: odd index on either axis.
-        let fresh: Vec<(usize, usize)> = (0..ys.len())
-            .flat_map(|iy| (0..xs.len()).map(move |ix| (ix, iy)))
-            .filter(|(ix, iy)| ix % 2 == 1 || iy % 2 == 1)
+    let mut open = vec![start];
+    let mut done: Vec<(Vec<u8>, Patch)> = Vec::new();
+    while !open.is_empty() {
+        // The nodes each open patch needs next: its first grid, or the new
+        // nodes of its next one (odd index on either axis).
+        let asks: Vec<Vec<(usize, usize)>> = open
+            .iter()
+            .map(|o| {
+                let side = o.grid.as_ref().map_or(levels[0], |(l, _)| levels[l + 1]);
+                let first = o.grid.is_none();
+                (0..side)
+                    .flat_map(|iy| (0..side).map(move |ix| (ix, iy)))
+                    .filter(|(ix, iy)| first || ix % 2 == 1 || iy % 2 == 1)
+                    .collect()
+            })
             .collect();
-        let pts: Vec<[f64; 2]> = fresh.iter().map(|&(ix, iy)| [xs[ix], ys[iy]]).collect();
+        let mut pts = Vec::new();
+        for (o, ask) in open.iter().zip(&asks) {
+            let side = o.grid.as_ref().map_or(levels[0], |(l, _)| levels[l + 1]);
+            let xs = lobatto(o.rect.x0, o.rect.x1, side);
+            let ys = lobatto(o.rect.y0, o.rect.y1, side);
+            pts.extend(ask.iter().map(|&(ix, iy)| [xs[ix], ys[iy]]));
+        }
         let Some(got) = exact(&pts)? else {
             return Ok(None);
         };
-        let scale = node_scale(&patch.values, channels);
-        let mut estimate = 0.0f64;
-        for (p, v) in pts.iter().zip(got.chunks_exact(channels)) {
-            let guess = eval_point(&patch, *p, channels);
-            let s = if channels == 1 {
-                1.0
-            } else {
-                v.iter().fold(scale, |a, b| a.max(b.abs()))
+        let mut got = got.chunks_exact(channels);
+        let mut next = Vec::new();
+        for (o, ask) in open.into_iter().zip(asks) {
+            let values: Vec<&[f64]> = got.by_ref().take(ask.len()).collect();
+            let (level, patch) = match o.grid {
+                None => {
+                    let patch = Patch {
+                        rect: o.rect,
+                        xs: lobatto(o.rect.x0, o.rect.x1, levels[0]),
+                        ys: lobatto(o.rect.y0, o.rect.y1, levels[0]),
+                        values: values.concat(),
+                        estimate: f64::INFINITY,
+                    };
+                    next.push(Open {
+                        grid: Some((0, patch)),
+                        ..o
+                    });
+                    continue;
+                }
+                Some((level, patch)) => (
+                    level + 1,
+                    refined(&patch, levels[level + 1], &ask, &values, channels),
+                ),
             };
-            for (g, v) in guess.iter().zip(v) {
-                estimate = estimate.max((g - v).abs() / s);
+            let from = levels[level - 1];
+            let estimate = patch.estimate;
+            let last = level + 1 == levels.len();
+            // Far off after a doubling: the patch is too large for its
+            // function at these degrees; quarters converge faster than finer
+            // grids. Not judged on the first doubling, from a grid of three
+            // points a side, which only lets a nearly linear patch stop early.
+            let cut_early = o.depth < MAX_DEPTH && from > 3 && estimate > CUT_RATIO * tol;
+            if estimate <= tol || (last && o.depth >= MAX_DEPTH) {
+                done.push((o.key, patch));
+            } else if cut_early || last {
+                let r = o.rect;
+                let (xm, ym) = (0.5 * (r.x0 + r.x1), 0.5 * (r.y0 + r.y1));
+                let quarters = [(r.x0, xm), (xm, r.x1)].into_iter().flat_map(|(x0, x1)| {
+                    [(r.y0, ym), (ym, r.y1)].map(|(y0, y1)| View { x0, x1, y0, y1 })
+                });
+                for (q, rect) in quarters.enumerate() {
+                    let mut key = o.key.clone();
+                    key.push(q as u8);
+                    next.push(Open {
+                        key,
+                        depth: o.depth + 1,
+                        rect,
+                        grid: None,
+                    });
+                }
+            } else {
+                next.push(Open {
+                    grid: Some((level, patch)),
+                    ..o
+                });
             }
         }
-        let mut values = vec![0.0f64; xs.len() * ys.len() * channels];
-        for iy in (0..ys.len()).step_by(2) {
-            for ix in (0..xs.len()).step_by(2) {
-                let (o, i) = (iy * xs.len() + ix, (iy / 2) * patch.xs.len() + ix / 2);
-                values[o * channels..(o + 1) * channels]
-                    .copy_from_slice(&patch.values[i * channels..(i + 1) * channels]);
-            }
-        }
-        for (&(ix, iy), v) in fresh.iter().zip(got.chunks_exact(channels)) {
-            let o = iy * xs.len() + ix;
-            values[o * channels..(o + 1) * channels].copy_from_slice(v);
-        }
-        patch = Patch {
-            rect,
-            xs,
-            ys,
-            values,
-            estimate,
+        open = next;
+    }
+    done.sort_by(|a, b| a.0.cmp(&b.0));
+    Ok(Some(done.into_iter().map(|(_, p)| p).collect()))
+}
+
+/// `patch` on its next grid of `size` points a side: the new nodes `fresh`
+/// (odd index on either axis) take `got`, the others the patch's values;
+/// its estimate is the largest error of the patch's interpolant at the new
+/// nodes, relative to the node's largest channel (with a floor,
+/// [`node_scale`]; absolute for one channel).
+fn refined(
+    patch: &Patch,
+    size: usize,
+    fresh: &[(usize, usize)],
+    got: &[&[f64]],
+    channels: usize,
+) -> Patch {
+    let rect = patch.rect;
+    let xs = lobatto(rect.x0, rect.x1, size);
+    let ys = lobatto(rect.y0, rect.y1, size);
+    let scale = node_scale(&patch.values, channels);
+    let mut estimate = 0.0f64;
+    for (&(ix, iy), v) in fresh.iter().zip(got) {
+        let guess = eval_point(patch, [xs[ix], ys[iy]], channels);
+        let s = if channels == 1 {
+            1.0
+        } else {
+            v.iter().fold(scale, |a, b| a.max(b.abs()))
         };
-        if estimate <= tol {
-            return Ok(Some(vec![patch]));
-        }
-        // Far off after a doubling: the patch is too large for its function
-        // at these degrees; quarters converge faster than finer grids. Not
-        // judged on the first doubling, from a grid of three points a side,
-        // which only lets a nearly linear patch stop early.
-        if depth < MAX_DEPTH && from > 3 && estimate > CUT_RATIO * tol {
-            break;
+        for (g, v) in guess.iter().zip(v.iter()) {
+            estimate = estimate.max((g - v).abs() / s);
         }
     }
-    if depth >= MAX_DEPTH || patch.estimate <= tol {
-        return Ok(Some(vec![patch]));
-    }
-    let (xm, ym) = (0.5 * (rect.x0 + rect.x1), 0.5 * (rect.y0 + rect.y1));
-    let mut out = Vec::new();
-    for (x0, x1) in [(rect.x0, xm), (xm, rect.x1)] {
-        for (y0, y1) in [(rect.y0, ym), (ym, rect.y1)] {
-            let quarter = View { x0, x1, y0, y1 };
-            match refine(quarter, channels, levels, tol, depth + 1, exact)? {
-                Some(p) => out.extend(p),
-                None => return Ok(None),
-            }
+    let mut values = vec![0.0f64; xs.len() * ys.len() * channels];
+    for iy in (0..ys.len()).step_by(2) {
+        for ix in (0..xs.len()).step_by(2) {
+            let (o, i) = (iy * xs.len() + ix, (iy / 2) * patch.xs.len() + ix / 2);
+            values[o * channels..(o + 1) * channels]
+                .copy_from_slice(&patch.values[i * channels..(i + 1) * channels]);
         }
     }
-    Ok(Some(out))
+    for (&(ix, iy), v) in fresh.iter().zip(got) {
+        let o = iy * xs.len() + ix;
+        values[o * channels..(o + 1) * channels].copy_from_slice(v);
+    }
+    Patch {
+        rect,
+        xs,
+        ys,
+        values,
+        estimate,
+    }
 }
 
 /// A floor for the relative error's scale, a thousandth of the largest node

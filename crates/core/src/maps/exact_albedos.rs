@@ -286,7 +286,13 @@ impl Atlas {
             GROUPS,
             || vec![0.0f64; 3 * m],
             |acc, range| {
-                SCRATCH.with_borrow_mut(|s| {
+                // Taken out of the thread's slot while in use (and put back
+                // after): a product large enough to run in parallel lets
+                // this thread pick up another block meanwhile, which then
+                // finds the slot empty and works in buffers of its own.
+                let mut scratch = SCRATCH.with_borrow_mut(std::mem::take);
+                {
+                    let s = &mut scratch;
                     let len = range.len();
                     s.t64.resize(m * len, 0.0);
                     s.z64.resize(n * len, 0.0);
@@ -309,7 +315,8 @@ impl Atlas {
                         }
                         add_row(acc, &s.t64[k * m..(k + 1) * m], mu, wt, rule.exponential);
                     }
-                })
+                }
+                SCRATCH.with_borrow_mut(|slot| *slot = scratch);
             },
         );
         let mut out = vec![[0.0f64; 3]; m];

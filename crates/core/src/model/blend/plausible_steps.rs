@@ -89,32 +89,50 @@ fn plausible_steps(model: &Model, gps: &[Blend<'_>], convex: &[Vec<f64>]) -> Res
     let by_band: Vec<Vec<f64>> = (0..dims.theta_h)
         .into_par_iter()
         .map(|band| {
-            SCRATCH.with_borrow_mut(|s| {
-                let mut steps = vec![0.0; m];
-                // Step 0 only, every point.
-                let at_zero = band_budget(model, band, &gp_weights, None, s);
-                let over: Vec<usize> = (0..m)
-                    .filter(|&j| !at_zero.within_at_zero(0, j, CLAMP_BUDGET))
-                    .collect();
-                if over.is_empty() {
-                    return steps;
-                }
-                // Every step, the points over budget.
-                let w: Vec<&[f64]> = over.iter().map(|&j| gp_weights[j]).collect();
-                let v: Vec<&[f64]> = over.iter().map(|&j| convex[j].as_slice()).collect();
-                let full = band_budget(model, band, &w, Some(&v), s);
-                let full_steps = full.steps(CLAMP_BUDGET);
-                for (k, &j) in over.iter().enumerate() {
-                    steps[j] = full_steps[k];
-                }
-                steps
-            })
+            // Taken out of the thread's slot while in use (a parallel
+            // product may let this thread pick up another band meanwhile,
+            // which then works in buffers of its own), and put back.
+            let mut scratch = SCRATCH.with_borrow_mut(std::mem::take);
+            let steps = band_steps(model, band, &gp_weights, convex, &mut scratch);
+            SCRATCH.with_borrow_mut(|slot| *slot = scratch);
+            steps
         })
         .collect();
     model.verify()?;
     Ok((0..m)
         .map(|j| by_band.iter().map(|s| s[j]).collect())
         .collect())
+}
+
+/// The plausible rule's step of each point in theta_h bin `band`: the
+/// budget at step 0 for every point, then every step for the points over
+/// budget ([`plausible_steps`]).
+fn band_steps(
+    model: &Model,
+    band: usize,
+    gp_weights: &[&[f64]],
+    convex: &[Vec<f64>],
+    s: &mut Scratch,
+) -> Vec<f64> {
+    let m = gp_weights.len();
+    let mut steps = vec![0.0; m];
+    // Step 0 only, every point.
+    let at_zero = band_budget(model, band, gp_weights, None, s);
+    let over: Vec<usize> = (0..m)
+        .filter(|&j| !at_zero.within_at_zero(0, j, CLAMP_BUDGET))
+        .collect();
+    if over.is_empty() {
+        return steps;
+    }
+    // Every step, the points over budget.
+    let w: Vec<&[f64]> = over.iter().map(|&j| gp_weights[j]).collect();
+    let v: Vec<&[f64]> = over.iter().map(|&j| convex[j].as_slice()).collect();
+    let full = band_budget(model, band, &w, Some(&v), s);
+    let full_steps = full.steps(CLAMP_BUDGET);
+    for (k, &j) in over.iter().enumerate() {
+        steps[j] = full_steps[k];
+    }
+    steps
 }
 
 /// The budget of `theta_h` bin `band` for blends with GP weights `w`
