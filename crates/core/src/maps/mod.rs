@@ -13,6 +13,8 @@ pub mod contour;
 mod exact_albedos;
 pub mod lattice;
 pub mod map_error;
+mod patches;
+mod pixel_rule;
 mod prepared_map;
 mod view;
 
@@ -75,7 +77,7 @@ pub struct Atlas {
     /// The last albedo fields built, and domains given up.
     fields: Recent<albedo_field::Cached>,
     /// The map's last per-pixel rules, one a sample count.
-    pixel_rules: Recent<albedo_map::PixelRule>,
+    pixel_rules: Recent<pixel_rule::PixelRule>,
     /// The prepared map saved beside the model, read on first use.
     lattice: OnceLock<lattice::Loaded>,
 }
