@@ -214,16 +214,23 @@ impl Model {
 
     /// `k(x)` and the GP's weights `K^-1 k(x)` at `x`, checked as [`Model::weights_at`].
     pub(crate) fn kernel_and_weights_at(&self, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>)> {
+        self.check_point(x)?;
+        let k = self.file.kernel.vector(self.latent.as_ref(), x);
+        let mut w = k.clone();
+        self.llt.solve_in_place(&mut w);
+        Ok((k, w))
+    }
+
+    /// Whether `x` is a latent point of this model: `q` finite coordinates
+    /// ([`CoreError::BadQuery`] if not).
+    pub(crate) fn check_point(&self, x: &[f64]) -> Result<()> {
         if x.len() != self.q() || x.iter().any(|v| !v.is_finite()) {
             return Err(CoreError::BadQuery(format!(
                 "latent point {x:?}: expected {} finite coordinates",
                 self.q()
             )));
         }
-        let k = self.file.kernel.vector(self.latent.as_ref(), x);
-        let mut w = k.clone();
-        self.llt.solve_in_place(&mut w);
-        Ok((k, w))
+        Ok(())
     }
 
     /// `cos(theta_i) cos(theta_o)` of every bin (at its representative

@@ -14,7 +14,7 @@ use crate::model::blend::plausible_budget::convex_weights_at;
 /// The weights of a pass over the store at `points` ([`PassWeights`]).
 pub(crate) fn pass_weights(model: &Model, points: &[[f64; 2]], floor: bool) -> Result<PassWeights> {
     for p in points {
-        model.kernel_and_weights_at(p)?;
+        model.check_point(p)?;
     }
     let (latent, kernel) = (model.latent(), model.file().kernel);
     let (n, m) = (latent.nrows(), points.len());
