@@ -191,11 +191,12 @@ pub fn methods(model: &Atlas, plan: &Plan, r: &mut Results) -> Result<(), Error>
             )?;
             let again = t.elapsed();
             let (max_err, mean_err) = map_error(&map, &pixels, &reference);
+            let sampled = matches!(map.method, AlbedoMethod::SampledField { .. });
             let (method, field) = match map.method {
                 AlbedoMethod::Field { nodes, .. } => (format!("field, {nodes} exact nodes"), true),
                 AlbedoMethod::SampledField { samples, nodes, .. } => (
                     format!("sampled field, {nodes} nodes of {samples} samples"),
-                    true,
+                    false,
                 ),
                 AlbedoMethod::Lattice { nodes, .. } => (format!("lattice, {nodes} nodes"), true),
                 AlbedoMethod::Quadrature { samples, .. } => {
@@ -211,6 +212,7 @@ pub fn methods(model: &Atlas, plan: &Plan, r: &mut Results) -> Result<(), Error>
                 view: name,
                 method,
                 field,
+                sampled,
                 prepared: false,
                 max_err,
                 mean_err,
@@ -233,6 +235,7 @@ pub fn methods(model: &Atlas, plan: &Plan, r: &mut Results) -> Result<(), Error>
             view: name,
             method: format!("prepared lattice, {} exact albedos", lattice.nodes()),
             field: false,
+            sampled: false,
             prepared: true,
             max_err,
             mean_err,

@@ -361,7 +361,8 @@ fn rules(w: &mut dyn Write, r: &Results) -> io::Result<()> {
     Ok(())
 }
 
-/// The default map method (the albedo field) against the per-pixel rule,
+/// The default map method (the albedo field, or the sampled field where an
+/// exact one is over budget) against the per-pixel rule,
 /// and whether the map can be drawn in real time.
 fn methods(w: &mut dyn Write, r: &Results) -> io::Result<()> {
     if r.methods.is_empty() {
@@ -412,6 +413,7 @@ fn methods(w: &mut dyn Write, r: &Results) -> io::Result<()> {
             .iter()
             .find(|m| m.view == view && !m.field && !m.prepared && !m.method.starts_with("default"))
     };
+    let sampled = |view: &str| r.methods.iter().find(|m| m.view == view && m.sampled);
     let prepared = |view: &str| r.methods.iter().find(|m| m.view == view && m.prepared);
     write!(w, "\n**Can the map be drawn in real time?** ")?;
     if let (Some(d), Some(z), Some(p)) = (prepared("default"), prepared("1/100"), pixel("default"))
@@ -431,8 +433,30 @@ fn methods(w: &mut dyn Write, r: &Results) -> io::Result<()> {
             pct(z.max_err)
         );
     }
-    match (find("1/100", true), pixel("default")) {
-        (Some(f), Some(p)) => writeln!(
+    match (find("1/100", true), pixel("default"), sampled("default")) {
+        (Some(f), Some(p), Some(s)) => writeln!(
+            w,
+            "Zoomed in, yes once its field is built: a {n}x{n} map of a view a hundred times \
+             smaller takes {} the first time and {} after, within {} of the dense rule \
+             (the per-pixel rule: {}, {} off). The whole default view, approximately: its \
+             albedo has more detail than an exact field within budget resolves, so it is drawn \
+             from a sampled field (albedos integrated from a sampled rule at its nodes) in {} \
+             the first time and {} after, up to {} off ({} on average), where integrating \
+             every pixel takes {}, up to {} off; within 0.1% it needs the model's map prepared \
+             (`brdf-atlas prepare`; `report --prepare` or `--thorough` measures it here).",
+            secs(f.first),
+            secs(f.again),
+            pct(f.max_err),
+            secs(pixel("1/100").map_or(p.first, |q| q.first)),
+            pct(pixel("1/100").map_or(p.max_err, |q| q.max_err)),
+            secs(s.first),
+            secs(s.again),
+            pct(s.max_err),
+            pct(s.mean_err),
+            secs(p.first),
+            pct(p.max_err)
+        ),
+        (Some(f), Some(p), None) => writeln!(
             w,
             "Zoomed in, yes once its field is built: a {n}x{n} map of a view a hundred times \
              smaller takes {} the first time and {} after, within {} of the dense rule \

@@ -88,6 +88,8 @@ pub struct MethodRow {
     pub method: String,
     /// The method is the albedo field.
     pub field: bool,
+    /// The method is the sampled field.
+    pub sampled: bool,
     /// The method is the prepared map's lattice.
     pub prepared: bool,
     pub max_err: f64,
