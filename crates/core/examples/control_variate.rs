@@ -5,21 +5,10 @@
 //! dense rule. `cargo run --release -p brdf-atlas-core --example
 //! control_variate -- MODEL [POINTS] [SAMPLES] [SIDE,...]`.
 
+use brdf_atlas_core::lattice::cubic_stencil;
+use brdf_atlas_core::map_error::albedo_error;
 use brdf_atlas_core::{AlbedoRequest, Atlas, FieldRequest, Integration, Model, View};
 use brdf_merl::synth::SplitMix64;
-
-fn stencil(t: f64, cells: usize) -> (usize, [f64; 4]) {
-    let cell = (t.floor() as usize).min(cells - 1);
-    let first = cell.saturating_sub(1).min(cells - 3);
-    let at: [f64; 4] = std::array::from_fn(|q| (first + q) as f64 - t);
-    let weights = std::array::from_fn(|q| {
-        (0..4)
-            .filter(|&r| r != q)
-            .map(|r| -at[r] / (at[q] - at[r]))
-            .product()
-    });
-    (first, weights)
-}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
@@ -43,17 +32,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .sampled_field(FieldRequest::new(view, 1 << 22), samples)?
         .ok_or("no field")?;
     let score = |got: &dyn Fn([f64; 2]) -> [f64; 3]| {
-        let (mut worst, mut sum) = (0.0f64, 0.0f64);
-        for (p, w) in points.iter().zip(&want) {
-            let g = got(*p);
-            let scale = w.iter().fold(1e-9f64, |a, v| a.max(v.abs()));
-            for c in 0..3 {
-                let e = (g[c] - w[c]).abs() / scale;
-                worst = worst.max(e);
-                sum += e;
-            }
-        }
-        (worst, sum / (3 * points.len()) as f64)
+        let got: Vec<[f64; 3]> = points.iter().map(|p| got(*p)).collect();
+        albedo_error(&got, &want)
     };
     let (w0, m0) = score(&|p| field.at(p).0);
     println!(
@@ -86,8 +66,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let corrected = |p: [f64; 2]| {
             let tx = (p[0] - view.x0) / (view.x1 - view.x0) * cells as f64;
             let ty = (p[1] - view.y0) / (view.y1 - view.y0) * cells as f64;
-            let (fx, wx) = stencil(tx, cells);
-            let (fy, wy) = stencil(ty, cells);
+            let ([fx, ..], wx) = cubic_stencil(tx, cells);
+            let ([fy, ..], wy) = cubic_stencil(ty, cells);
             let mut g = field.at(p).0;
             for (a, wa) in wy.iter().enumerate() {
                 for (b, wb) in wx.iter().enumerate() {

@@ -10,22 +10,8 @@
 //! exceeds 0.5%. `cargo run --release -p brdf-atlas-core --example
 //! map_detail -- MODEL [L]` (L = 6 by default: 4,225 nodes a rule).
 
+use brdf_atlas_core::lattice::cubic_stencil;
 use brdf_atlas_core::{AlbedoRequest, Atlas, BlendRule, Integration, Model, View};
-
-/// Lagrange weights of the cubic through nodes `first..first + 4` at `t`
-/// (in node units), `first` chosen so the stencil stays on the grid.
-fn stencil(t: f64, cells: usize) -> (usize, [f64; 4]) {
-    let cell = (t.floor() as usize).min(cells - 1);
-    let first = cell.saturating_sub(1).min(cells - 3);
-    let at: [f64; 4] = std::array::from_fn(|q| (first + q) as f64 - t);
-    let weights = std::array::from_fn(|q| {
-        (0..4)
-            .filter(|&r| r != q)
-            .map(|r| -at[r] / (at[q] - at[r]))
-            .product()
-    });
-    (first, weights)
-}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
@@ -88,8 +74,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     if r % step == 0 && c % step == 0 {
                         continue;
                     }
-                    let (fy, wy) = stencil(r as f64 / step as f64, cells);
-                    let (fx, wx) = stencil(c as f64 / step as f64, cells);
+                    let ([fy, ..], wy) = cubic_stencil(r as f64 / step as f64, cells);
+                    let ([fx, ..], wx) = cubic_stencil(c as f64 / step as f64, cells);
                     let mut got = [0.0f64; 3];
                     for (a, wa) in wy.iter().enumerate() {
                         for (b, wb) in wx.iter().enumerate() {

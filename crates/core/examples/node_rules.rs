@@ -7,6 +7,7 @@
 //! points share a pass. `cargo run --release -p brdf-atlas-core --example
 //! node_rules -- MODEL [POINTS]`.
 
+use brdf_atlas_core::map_error::albedo_error;
 use brdf_atlas_core::{AlbedoRequest, Atlas, Integration, Model, View};
 use brdf_merl::Quadrature;
 use brdf_merl::synth::SplitMix64;
@@ -55,19 +56,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 AlbedoRequest::new().integration(Integration::Rule(rule)),
             )?;
             let per_point = t.elapsed().as_secs_f64() / points.len() as f64;
-            let (mut worst, mut sum) = (0.0f64, 0.0f64);
-            for (g, w) in got.iter().zip(&want) {
-                let scale = w.iter().fold(1e-9f64, |a, v| a.max(v.abs()));
-                for c in 0..3 {
-                    let e = (g[c] - w[c]).abs() / scale;
-                    worst = worst.max(e);
-                    sum += e;
-                }
-            }
+            let (worst, mean) = albedo_error(&got, &want);
             println!(
                 "{name:9} {rule_name:16} bins {:8}  max {worst:9.2e}  mean {:9.2e}  {:7.1} us/point",
                 rule.len(),
-                sum / (3 * points.len()) as f64,
+                mean,
                 1e6 * per_point
             );
         }

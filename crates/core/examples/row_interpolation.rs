@@ -11,22 +11,8 @@
 //! distances vary faster. `cargo run --release -p brdf-atlas-core
 //! --example row_interpolation -- MODEL [POINTS]` (16 points by default).
 
+use brdf_atlas_core::lattice::cubic_stencil;
 use brdf_atlas_core::{BlendRule, Model, Rows, View};
-
-/// The tensor-cubic stencil round `t` (grid units, `cells` cells): first
-/// node and Lagrange weights.
-fn stencil(t: f64, cells: usize) -> (usize, [f64; 4]) {
-    let cell = (t.floor() as usize).min(cells - 1);
-    let first = cell.saturating_sub(1).min(cells - 3);
-    let at: [f64; 4] = std::array::from_fn(|q| (first + q) as f64 - t);
-    let weights = std::array::from_fn(|q| {
-        (0..4)
-            .filter(|&r| r != q)
-            .map(|r| -at[r] / (at[q] - at[r]))
-            .product()
-    });
-    (first, weights)
-}
 
 /// `|z . d|` for every `stride`-th store row.
 fn row_errors(model: &Model, d: &[f64], stride: usize) -> Vec<f64> {
@@ -81,8 +67,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
         let (mut gp, mut convex) = (Vec::new(), Vec::new());
         for &x in &points {
-            let (fx, wx) = stencil((x[0] - view.x0) / hx, cells);
-            let (fy, wy) = stencil((x[1] - view.y0) / hy, cells);
+            let ([fx, ..], wx) = cubic_stencil((x[0] - view.x0) / hx, cells);
+            let ([fy, ..], wy) = cubic_stencil((x[1] - view.y0) / hy, cells);
             let (want_g, want_c) = weights(x)?;
             let (mut got_g, mut got_c) = (vec![0.0; want_g.len()], vec![0.0; want_c.len()]);
             for (a, wa) in wy.iter().enumerate() {

@@ -7,6 +7,7 @@
 //! for [-3, 3]^2. `cargo run --release -p brdf-atlas-core --example
 //! sampled_field -- MODEL [POINTS] [SAMPLES,...]`.
 
+use brdf_atlas_core::map_error::albedo_error;
 use brdf_atlas_core::{AlbedoRequest, Atlas, FieldRequest, Model, View};
 use brdf_merl::synth::SplitMix64;
 
@@ -47,22 +48,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .sampled_field(FieldRequest::new(view, 1 << 22), s)?
                 .ok_or("no field within 4 million nodes")?;
             let took = t.elapsed().as_secs_f64();
-            let (mut worst, mut sum) = (0.0f64, 0.0f64);
-            for (p, w) in points.iter().zip(&want) {
-                let (got, _) = field.at(*p);
-                let scale = w.iter().fold(1e-9f64, |a, v| a.max(v.abs()));
-                for c in 0..3 {
-                    let e = (got[c] - w[c]).abs() / scale;
-                    worst = worst.max(e);
-                    sum += e;
-                }
-            }
+            let got: Vec<[f64; 3]> = points.iter().map(|p| field.at(*p).0).collect();
+            let (worst, mean) = albedo_error(&got, &want);
             println!(
                 "{name:9} {s:7} {:8} {:8} {:9.1e} {took:8.3} {worst:9.2e} {:9.2e}",
                 field.nodes(),
                 field.patches(),
                 field.estimate(),
-                sum / (3 * points.len()) as f64
+                mean
             );
         }
     }

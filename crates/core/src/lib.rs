@@ -68,7 +68,7 @@ pub use maps::{
     FIELD_SAMPLES, FieldRequest, Integration, LATTICE_TOLERANCE, MapRequest, NODE_PHI_D_STEP,
     Segment, View, contour_levels, contours, lattice_path, luminance,
 };
-pub use maps::{albedo_field, map_error};
+pub use maps::{albedo_field, lattice, map_error};
 pub use model::blend::soft_floor;
 pub use model::blend::{Blend, BlendRule, Confidence, LOW_CONFIDENCE_VARIANCE, Plausibility};
 pub use model::{FitRecord, InputIdentity, Model, ModelFile, StoreRef, store_path_for};

@@ -109,11 +109,6 @@ impl Quadrature {
         if shape.len() != dims.bins() {
             return fine.clone();
         }
-        let mut mass = vec![0.0f64; dims.bins()];
-        for (&b, &w) in fine.bins.iter().zip(&fine.weights) {
-            let f = shape[b as usize];
-            mass[b as usize] = if f.is_finite() && f > 0.0 { w * f } else { 0.0 };
-        }
         let side = (dims.bins() as f64 / samples.max(1) as f64).cbrt();
         let cuts = |n: usize, more: f64| -> Vec<usize> {
             let boxes = ((n as f64 * more / side).round() as usize).clamp(1, n);
@@ -124,7 +119,7 @@ impl Quadrature {
             cuts(dims.theta_d, SHAPED_SPLIT[1]),
             cuts(dims.phi_d, SHAPED_SPLIT[2]),
         );
-        Quadrature::shaped_boxes(dims, &mass, shape, [&ch, &cd, &cp])
+        Quadrature::shaped_boxes(fine, shape, [&ch, &cd, &cp])
     }
 
     /// [`Quadrature::with_samples_shaped`] on every theta_h bin (where
@@ -140,25 +135,26 @@ impl Quadrature {
         if shape.len() != dims.bins() {
             return fine.clone();
         }
-        let mut mass = vec![0.0f64; dims.bins()];
-        for (&b, &w) in fine.bins.iter().zip(&fine.weights) {
-            let f = shape[b as usize];
-            mass[b as usize] = if f.is_finite() && f > 0.0 { w * f } else { 0.0 };
-        }
         let cuts = |n: usize, boxes: usize| -> Vec<usize> {
             let boxes = boxes.clamp(1, n);
             (0..=boxes).map(|j| j * n / boxes).collect()
         };
         let ch: Vec<usize> = (0..=dims.theta_h).collect();
         let (cd, cp) = (cuts(dims.theta_d, theta_d), cuts(dims.phi_d, phi_d));
-        Quadrature::shaped_boxes(dims, &mass, shape, [&ch, &cd, &cp])
+        Quadrature::shaped_boxes(fine, shape, [&ch, &cd, &cp])
     }
 
     /// One bin a box of the grid `cuts` (theta_h, theta_d, phi_d) standing
-    /// for the box's `mass` (the fine rule's weight times `shape`), with
+    /// for the box's mass (the `fine` rule's weight times `shape`), with
     /// weight `mass / shape` there ([`Quadrature::with_samples_shaped`]).
-    fn shaped_boxes(dims: Dims, mass: &[f64], shape: &[f64], cuts: [&[usize]; 3]) -> Quadrature {
+    fn shaped_boxes(fine: &Quadrature, shape: &[f64], cuts: [&[usize]; 3]) -> Quadrature {
         let [ch, cd, cp] = cuts;
+        let dims = fine.dims;
+        let mut mass = vec![0.0f64; dims.bins()];
+        for (&b, &w) in fine.bins.iter().zip(&fine.weights) {
+            let f = shape[b as usize];
+            mass[b as usize] = if f.is_finite() && f > 0.0 { w * f } else { 0.0 };
+        }
         let mut rule = vec![0.0f64; dims.bins()];
         for h in ch.windows(2) {
             for d in cd.windows(2) {
@@ -600,65 +596,35 @@ mod tests {
         }
     }
 
-    #[test]
-    fn shaped_rules_are_exact_for_the_shape_and_converge_otherwise() {
+    /// The dense rule, a shape (a glossy synthetic material's mean over
+    /// channels, 0 where unmeasured), a table proportional to it and another
+    /// material's table.
+    fn shape_and_tables() -> (Quadrature, Vec<f64>, [MerlTable; 2]) {
         let dims = Dims::MERL;
-        let dense = Quadrature::dense(dims, 2);
         let materials = crate::synth::database(4, 5);
         let glossy = materials[1].brdf.table(dims);
-        // The shape: the glossy material's mean over channels (0 where unmeasured).
         let shape: Vec<f64> = (0..dims.bins())
             .map(|b| glossy.rgb_or_zero(b).iter().sum::<f64>() / 3.0)
             .collect();
         let proportional =
             MerlTable::from_fn(dims, |b| Some([0.5, 1.0, 2.0].map(|k| k * shape[b])));
         let other = materials[0].brdf.table(dims);
-        for (table, exact) in [(&proportional, true), (&other, false)] {
-            let want = dense.albedo(table);
-            let mut errors = Vec::new();
-            for s in [64, 1024, 65_536] {
-                let got = Quadrature::with_samples_shaped(&dense, s, &shape).albedo(table);
-                errors.push((0..3).fold(0.0f64, |e, c| e.max((got[c] - want[c]).abs() / want[c])));
-            }
-            if exact {
-                assert!(errors.iter().all(|e| *e < 1e-12), "{errors:?}");
-            } else {
-                assert!(
-                    errors.windows(2).all(|e| e[1] < e[0]) && errors[2] < 1e-2,
-                    "{errors:?}"
-                );
-            }
-        }
+        (Quadrature::dense(dims, 2), shape, [proportional, other])
     }
 
-    #[test]
-    fn banded_rules_keep_every_theta_h_bin_are_exact_for_the_shape_and_converge() {
-        let dims = Dims::MERL;
-        let dense = Quadrature::dense(dims, 2);
-        let materials = crate::synth::database(4, 5);
-        let glossy = materials[1].brdf.table(dims);
-        let shape: Vec<f64> = (0..dims.bins())
-            .map(|b| glossy.rgb_or_zero(b).iter().sum::<f64>() / 3.0)
-            .collect();
-        let rule = Quadrature::banded_shaped(&dense, 3, 4, &shape);
-        // One bin a box: at most 3 x 4 a theta_h band, and every band read.
-        let mut per_band = vec![0usize; dims.theta_h];
-        for &b in rule.bins() {
-            per_band[dims.unbin(b as usize).0] += 1;
-        }
-        assert!(
-            per_band.iter().all(|&n| (1..=12).contains(&n)),
-            "{per_band:?}"
-        );
-        let proportional =
-            MerlTable::from_fn(dims, |b| Some([0.5, 1.0, 2.0].map(|k| k * shape[b])));
-        let other = materials[0].brdf.table(dims);
-        for (table, exact) in [(&proportional, true), (&other, false)] {
+    /// `rules` (fewer bins to more) are exact for a table proportional to
+    /// their shape, and converge on another table, to within 1% at the last.
+    fn assert_exact_for_the_shape_and_converging(
+        dense: &Quadrature,
+        rules: &[Quadrature],
+        [proportional, other]: &[MerlTable; 2],
+    ) {
+        for (table, exact) in [(proportional, true), (other, false)] {
             let want = dense.albedo(table);
-            let errors: Vec<f64> = [(2, 2), (6, 6), (30, 60)]
+            let errors: Vec<f64> = rules
                 .iter()
-                .map(|&(d, p)| {
-                    let got = Quadrature::banded_shaped(&dense, d, p, &shape).albedo(table);
+                .map(|rule| {
+                    let got = rule.albedo(table);
                     (0..3).fold(0.0f64, |e, c| e.max((got[c] - want[c]).abs() / want[c]))
                 })
                 .collect();
@@ -671,6 +637,32 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn shaped_rules_are_exact_for_the_shape_and_converge_otherwise() {
+        let (dense, shape, tables) = shape_and_tables();
+        let rules = [64, 1024, 65_536].map(|s| Quadrature::with_samples_shaped(&dense, s, &shape));
+        assert_exact_for_the_shape_and_converging(&dense, &rules, &tables);
+    }
+
+    #[test]
+    fn banded_rules_keep_every_theta_h_bin_are_exact_for_the_shape_and_converge() {
+        let (dense, shape, tables) = shape_and_tables();
+        let dims = dense.dims();
+        let rule = Quadrature::banded_shaped(&dense, 3, 4, &shape);
+        // One bin a box: at most 3 x 4 a theta_h band, and every band read.
+        let mut per_band = vec![0usize; dims.theta_h];
+        for &b in rule.bins() {
+            per_band[dims.unbin(b as usize).0] += 1;
+        }
+        assert!(
+            per_band.iter().all(|&n| (1..=12).contains(&n)),
+            "{per_band:?}"
+        );
+        let rules = [(2, 2), (6, 6), (30, 60)]
+            .map(|(d, p)| Quadrature::banded_shaped(&dense, d, p, &shape));
+        assert_exact_for_the_shape_and_converging(&dense, &rules, &tables);
     }
 
     #[test]

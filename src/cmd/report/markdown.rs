@@ -433,22 +433,29 @@ fn methods(w: &mut dyn Write, r: &Results) -> io::Result<()> {
             pct(z.max_err)
         );
     }
-    match (find("1/100", true), pixel("default"), sampled("default")) {
-        (Some(f), Some(p), Some(s)) => writeln!(
+    let (Some(f), Some(p)) = (find("1/100", true), pixel("default")) else {
+        return writeln!(w, "not measured with a field here (see the table).");
+    };
+    write!(
+        w,
+        "Zoomed in, yes once its field is built: a {n}x{n} map of a view a hundred times \
+         smaller takes {} the first time and {} after, within {} of the dense rule \
+         (the per-pixel rule: {}, {} off)",
+        secs(f.first),
+        secs(f.again),
+        pct(f.max_err),
+        secs(pixel("1/100").map_or(p.first, |q| q.first)),
+        pct(pixel("1/100").map_or(p.max_err, |q| q.max_err)),
+    )?;
+    match sampled("default") {
+        Some(s) => writeln!(
             w,
-            "Zoomed in, yes once its field is built: a {n}x{n} map of a view a hundred times \
-             smaller takes {} the first time and {} after, within {} of the dense rule \
-             (the per-pixel rule: {}, {} off). The whole default view, approximately: its \
-             albedo has more detail than an exact field within budget resolves, so it is drawn \
-             from a sampled field (albedos integrated from a sampled rule at its nodes) in {} \
-             the first time and {} after, up to {} off ({} on average), where integrating \
-             every pixel takes {}, up to {} off; within 0.1% it needs the model's map prepared \
-             (`brdf-atlas prepare`; `report --prepare` or `--thorough` measures it here).",
-            secs(f.first),
-            secs(f.again),
-            pct(f.max_err),
-            secs(pixel("1/100").map_or(p.first, |q| q.first)),
-            pct(pixel("1/100").map_or(p.max_err, |q| q.max_err)),
+            ". The whole default view, approximately: its albedo has more detail than an \
+             exact field within budget resolves, so it is drawn from a sampled field \
+             (albedos integrated from a sampled rule at its nodes) in {} the first time and \
+             {} after, up to {} off ({} on average), where integrating every pixel takes {}, \
+             up to {} off; within 0.1% it needs the model's map prepared (`brdf-atlas \
+             prepare`; `report --prepare` or `--thorough` measures it here).",
             secs(s.first),
             secs(s.again),
             pct(s.max_err),
@@ -456,23 +463,15 @@ fn methods(w: &mut dyn Write, r: &Results) -> io::Result<()> {
             secs(p.first),
             pct(p.max_err)
         ),
-        (Some(f), Some(p), None) => writeln!(
+        None => writeln!(
             w,
-            "Zoomed in, yes once its field is built: a {n}x{n} map of a view a hundred times \
-             smaller takes {} the first time and {} after, within {} of the dense rule \
-             (the per-pixel rule: {}, {} off); the whole default view is not: its albedo has \
-             more detail than a field within budget resolves, so it is integrated per pixel \
-             in {}, up to {} off, until the model's map is prepared (`brdf-atlas prepare`; \
-             `report --prepare` or `--thorough` measures it here).",
-            secs(f.first),
-            secs(f.again),
-            pct(f.max_err),
-            secs(pixel("1/100").map_or(p.first, |q| q.first)),
-            pct(pixel("1/100").map_or(p.max_err, |q| q.max_err)),
+            "; the whole default view is not: its albedo has more detail than a field within \
+             budget resolves, so it is integrated per pixel in {}, up to {} off, until the \
+             model's map is prepared (`brdf-atlas prepare`; `report --prepare` or \
+             `--thorough` measures it here).",
             secs(p.first),
             pct(p.max_err)
         ),
-        _ => writeln!(w, "not measured with a field here (see the table)."),
     }
 }
 

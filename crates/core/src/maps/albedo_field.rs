@@ -240,36 +240,46 @@ impl Atlas {
             rule,
             progress,
         } = request;
+        self.cached_field(view, rule, None, budget, |domain, floor| {
+            // Plan with the per-pixel rule's rows first: a field that would
+            // need far more nodes than the budget is given up before any
+            // exact node is paid for.
+            match self.plan(domain, budget, floor, progress)? {
+                Some(_) => self.build(domain, budget, floor, progress),
+                None => Ok(None),
+            }
+        })
+    }
+
+    /// The field of `view`'s domain for `rule`'s material with nodes of
+    /// `samples` samples (`None`: the nodes' rule) within `budget` nodes:
+    /// from the atlas's cache (a field built, or a domain given up at this
+    /// budget or a larger one), else from `build(domain, floor)`, kept.
+    fn cached_field(
+        &self,
+        view: View,
+        rule: BlendRule,
+        samples: Option<usize>,
+        budget: usize,
+        build: impl FnOnce(View, bool) -> Result<Option<AlbedoField>>,
+    ) -> Result<Option<Arc<AlbedoField>>> {
         view.check()?;
         let floor = floor_of(rule)?;
         let domain = domain_of(view);
-        let cache = &self.fields;
-        let cached = |f: &Cached| {
-            f.domain == domain
-                && f.floor == floor
-                && f.samples.is_none()
-                && (f.field.is_some() || f.budget >= budget)
-        };
-        if let Some(f) = cache.find(cached) {
+        let same = |f: &Cached| f.domain == domain && f.floor == floor && f.samples == samples;
+        let cached = |f: &Cached| same(f) && (f.field.is_some() || f.budget >= budget);
+        if let Some(f) = self.fields.find(cached) {
             return Ok(f.field.clone());
         }
-        // Plan with the per-pixel rule's rows first: a field that would
-        // need far more nodes than the budget is given up before any
-        // exact node is paid for.
-        let field = match self.plan(domain, budget, floor, progress)? {
-            Some(_) => self.build(domain, budget, floor, progress)?.map(Arc::new),
-            None => None,
-        };
+        let field = build(domain, floor)?.map(Arc::new);
         let entry = Arc::new(Cached {
             domain,
             floor,
-            samples: None,
+            samples,
             budget,
             field: field.clone(),
         });
-        cache.keep(entry, FIELD_CACHE, cached, |f| {
-            f.domain == domain && f.floor == floor && f.samples.is_none()
-        });
+        self.fields.keep(entry, FIELD_CACHE, cached, same);
         Ok(field)
     }
 
@@ -340,34 +350,10 @@ impl Atlas {
             rule,
             progress,
         } = request;
-        view.check()?;
-        let floor = floor_of(rule)?;
-        let domain = domain_of(view);
-        let key = Some(samples.max(1));
-        let cache = &self.fields;
-        let cached = |f: &Cached| {
-            f.domain == domain
-                && f.floor == floor
-                && f.samples == key
-                && (f.field.is_some() || f.budget >= budget)
-        };
-        if let Some(f) = cache.find(cached) {
-            return Ok(f.field.clone());
-        }
-        let field = self
-            .build_sampled(domain, budget, samples.max(1), floor, progress)?
-            .map(Arc::new);
-        let entry = Arc::new(Cached {
-            domain,
-            floor,
-            samples: key,
-            budget,
-            field: field.clone(),
-        });
-        cache.keep(entry, FIELD_CACHE, cached, |f| {
-            f.domain == domain && f.floor == floor && f.samples == key
-        });
-        Ok(field)
+        let samples = samples.max(1);
+        self.cached_field(view, rule, Some(samples), budget, |domain, floor| {
+            self.build_sampled(domain, budget, samples, floor, progress)
+        })
     }
 
     /// The albedo's patches over `domain` with node values from `rows`, and

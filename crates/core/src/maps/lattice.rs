@@ -393,9 +393,11 @@ fn rule_name(rule: BlendRule) -> &'static str {
     }
 }
 
-/// The four lattice indices of a cubic stencil round `t` (in units of the
-/// level's step, within `0..=cells`), and their Lagrange weights.
-fn stencil(t: f64, cells: usize) -> ([usize; 4], [f64; 4]) {
+/// The four grid indices of the cubic stencil round `t` (in units of the
+/// grid's step, within `0..=cells`, `cells >= 3`), kept on the grid, and
+/// their Lagrange weights: `sum_q w_q f(i_q)` is the cubic through the four
+/// nodes at `t`.
+pub fn cubic_stencil(t: f64, cells: usize) -> ([usize; 4], [f64; 4]) {
     let cell = (t.max(0.0).floor() as usize).min(cells - 1);
     let first = cell.saturating_sub(1).min(cells - 3);
     let at: [f64; 4] = std::array::from_fn(|q| (first + q) as f64 - t);
@@ -412,8 +414,8 @@ fn stencil(t: f64, cells: usize) -> ([usize; 4], [f64; 4]) {
 pub(super) fn stencil_keys(level: u32, y: f64, x: f64) -> impl Iterator<Item = Key> {
     let step = 1usize << (FINEST - level);
     let cells = 1usize << level;
-    let (iy, _) = stencil(y / step as f64, cells);
-    let (ix, _) = stencil(x / step as f64, cells);
+    let (iy, _) = cubic_stencil(y / step as f64, cells);
+    let (ix, _) = cubic_stencil(x / step as f64, cells);
     iy.into_iter()
         .flat_map(move |a| ix.into_iter().map(move |b| (a * step, b * step)))
 }
@@ -429,8 +431,8 @@ pub(super) fn cubic(
 ) -> bool {
     let step = 1usize << (FINEST - level);
     let cells = 1usize << level;
-    let (iy, wy) = stencil(y / step as f64, cells);
-    let (ix, wx) = stencil(x / step as f64, cells);
+    let (iy, wy) = cubic_stencil(y / step as f64, cells);
+    let (ix, wx) = cubic_stencil(x / step as f64, cells);
     for (a, wa) in iy.iter().zip(wy) {
         for (b, wb) in ix.iter().zip(wx) {
             let Some(v) = value((a * step, b * step)) else {
