@@ -299,7 +299,7 @@ impl Atlas {
     /// [`DEFAULT_SAMPLES`](crate::DEFAULT_SAMPLES) would, and at least
     /// [`MIN_NODES`].
     pub fn sampled_field_budget(&self, pixels: usize) -> usize {
-        let rows = self.plan_rows().rows.len() + self.sampled_rows(FIELD_SAMPLES).rows.rows.len();
+        let rows = self.plan_rows().rows.len() + self.pixel_rule(FIELD_SAMPLES).rows.rows.len();
         let per_pixel = 3.0 * crate::DEFAULT_SAMPLES as f64;
         ((pixels as f64 * per_pixel / rows.max(1) as f64) as usize).max(MIN_NODES)
     }
@@ -401,18 +401,7 @@ impl Atlas {
         floor: bool,
         progress: &dyn Progress,
     ) -> Result<Option<AlbedoField>> {
-        self.build_with(domain, budget, self.node_rows(), floor, progress)
-    }
-
-    /// [`Atlas::build`] with node values from `rows`.
-    fn build_with(
-        &self,
-        domain: View,
-        budget: usize,
-        rows: &RuleRows,
-        floor: bool,
-        progress: &dyn Progress,
-    ) -> Result<Option<AlbedoField>> {
+        let rows = self.node_rows();
         let Some((albedo, nodes)) = self.albedo_patches(domain, budget, rows, floor, progress)?
         else {
             return Ok(None);
@@ -444,7 +433,8 @@ impl Atlas {
                 .iter()
                 .flat_map(|p| grid_points(&p.xs, &p.ys))
                 .collect();
-            let rows = self.sampled_rows(samples);
+            // The per-pixel rule of that sample count holds its rows.
+            let rule = self.pixel_rule(samples);
             // A few thousand points a pass: the rows are few, and a pass's
             // values at every point of a block of rows stay in cache.
             let mut values = Vec::with_capacity(points.len());
@@ -452,7 +442,7 @@ impl Atlas {
                 if progress.cancelled() {
                     return Err(CoreError::Cancelled);
                 }
-                values.extend(self.albedos_over(&rows, chunk, floor)?);
+                values.extend(self.albedos_over(&rule.rows, chunk, floor)?);
             }
             let mut values = values.iter().flatten().copied();
             for p in &mut albedo {

@@ -5,8 +5,6 @@
 //! and plans its refinement on the rows of the map's per-pixel rule, a few
 //! hundred instead of millions, before paying for exact nodes.
 
-use std::sync::Arc;
-
 use brdf_merl::Quadrature;
 
 use crate::data::Store;
@@ -50,23 +48,6 @@ pub(crate) struct RuleRows {
     /// `max(0, e^t - 1)` (log) rather than `max(0, t)` (raw).
     pub(crate) exponential: bool,
 }
-
-/// The rows of a sample count's per-pixel rule ([`Atlas::sampled_rows`]).
-pub(crate) struct SampledRows {
-    pub(crate) samples: usize,
-    pub(crate) rows: RuleRows,
-}
-
-impl std::ops::Deref for SampledRows {
-    type Target = RuleRows;
-
-    fn deref(&self) -> &RuleRows {
-        &self.rows
-    }
-}
-
-/// Sample counts whose rows an atlas keeps for sampled fields.
-const SAMPLED_ROWS_CACHE: usize = 4;
 
 /// What [`Atlas::exact_albedos`] integrates: the material of a rule
 /// ([`BlendRule::default`] unless set), with the rows of a quadrature rule
@@ -172,24 +153,6 @@ impl Atlas {
             );
             self.rows_of(&rule)
         })
-    }
-
-    /// The rows of the `samples`-sample per-pixel rule, the nodes' rule
-    /// of a sampled field ([`Atlas::sampled_field`]); from the atlas's
-    /// cache or built and kept.
-    pub(crate) fn sampled_rows(&self, samples: usize) -> Arc<SampledRows> {
-        let same = |r: &SampledRows| r.samples == samples;
-        if let Some(r) = self.sampled_rows.find(same) {
-            return r;
-        }
-        let rule = Quadrature::with_samples_shaped(self.model.albedo_rule(), samples, self.shape());
-        let rows = Arc::new(SampledRows {
-            samples,
-            rows: self.rows_of(&rule),
-        });
-        self.sampled_rows
-            .keep(rows.clone(), SAMPLED_ROWS_CACHE, same, |_| false);
-        rows
     }
 
     /// The store rows `rule` reads (measured ones only, channel-major), with

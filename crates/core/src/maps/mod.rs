@@ -72,8 +72,6 @@ pub struct Atlas {
     /// The rows of the map's per-pixel rule at its default sample count,
     /// which plan a field.
     plan_rows: OnceLock<exact_albedos::RuleRows>,
-    /// The rows of the last sampled fields' rules, one a sample count.
-    sampled_rows: Recent<exact_albedos::SampledRows>,
     /// The last albedo fields built, and domains given up.
     fields: Recent<albedo_field::Cached>,
     /// The map's last per-pixel rules, one a sample count.
@@ -110,7 +108,6 @@ impl Atlas {
             rule_rows: OnceLock::new(),
             node_rows: OnceLock::new(),
             plan_rows: OnceLock::new(),
-            sampled_rows: Recent::default(),
             fields: Recent::default(),
             pixel_rules: Recent::default(),
             lattice: OnceLock::new(),
