@@ -16,7 +16,7 @@ use crate::model::blend::pass_weights::{PassWeights, floor_of, pass_weights};
 use crate::model::blend::plausibility::BlendRule;
 use crate::model::blend::soft_floor::{floor_points, top_of};
 use crate::simd::fastexp;
-use crate::simd::fold::{GROUPS, ordered_blocks};
+use crate::simd::fold::{GROUPS, ordered_blocks, with_scratch};
 
 /// Quadrature samples per pixel when a map needs them (non-linear transforms)
 /// and the caller gives none; docs/performance.md says what it buys. Defined
@@ -249,13 +249,9 @@ impl Atlas {
             GROUPS,
             || vec![0.0f64; 3 * m],
             |acc, range| {
-                // Taken out of the thread's slot while in use (and put back
-                // after): a product large enough to run in parallel lets
-                // this thread pick up another block meanwhile, which then
-                // finds the slot empty and works in buffers of its own.
-                let mut scratch = SCRATCH.with_borrow_mut(std::mem::take);
-                {
-                    let s = &mut scratch;
+                // The products can run in parallel: `with_scratch`, not a
+                // borrow of the slot for the whole block.
+                with_scratch(&SCRATCH, |s| {
                     let len = range.len();
                     s.t64.resize(m * len, 0.0);
                     s.z64.resize(n * len, 0.0);
@@ -278,8 +274,7 @@ impl Atlas {
                         }
                         add_row(acc, &s.t64[k * m..(k + 1) * m], mu, wt, rule.exponential);
                     }
-                }
-                SCRATCH.with_borrow_mut(|slot| *slot = scratch);
+                })
             },
         );
         let mut out = vec![[0.0f64; 3]; m];

@@ -7,9 +7,26 @@
 //! groups' states in group order. However rayon schedules the groups, every
 //! sum is formed in the same order, so the result has the same bits.
 
+use std::cell::RefCell;
 use std::ops::Range;
+use std::thread::LocalKey;
 
 use rayon::prelude::*;
+
+/// `f` with the thread's scratch buffers in `slot`, taken out of the slot
+/// while `f` runs and put back after. A pass's step that runs a parallel
+/// product may let its thread pick up another step of the same pass
+/// meanwhile; that step then finds the slot empty and works in buffers of
+/// its own, where borrowing the slot for the whole step would panic.
+pub(crate) fn with_scratch<T: Default, R>(
+    slot: &'static LocalKey<RefCell<T>>,
+    f: impl FnOnce(&mut T) -> R,
+) -> R {
+    let mut scratch = slot.with_borrow_mut(std::mem::take);
+    let out = f(&mut scratch);
+    slot.with_borrow_mut(|s| *s = scratch);
+    out
+}
 
 /// The number of groups a pass is split into when the caller does not ask
 /// for one per block: enough to keep any core count busy, few enough that

@@ -24,6 +24,7 @@ use crate::model::blend::plausible_budget::convex_weights_at;
 use crate::model::blend::plausible_budget::{Budget, CLAMP_BUDGET, STEPS, counted};
 use crate::model::blend::reconstruct::{Bands, Blend};
 use crate::simd::dot;
+use crate::simd::fold::with_scratch;
 
 /// Store rows a step of the pass multiplies at once.
 const BLOCK: usize = 480;
@@ -89,13 +90,9 @@ fn plausible_steps(model: &Model, gps: &[Blend<'_>], convex: &[Vec<f64>]) -> Res
     let by_band: Vec<Vec<f64>> = (0..dims.theta_h)
         .into_par_iter()
         .map(|band| {
-            // Taken out of the thread's slot while in use (a parallel
-            // product may let this thread pick up another band meanwhile,
-            // which then works in buffers of its own), and put back.
-            let mut scratch = SCRATCH.with_borrow_mut(std::mem::take);
-            let steps = band_steps(model, band, &gp_weights, convex, &mut scratch);
-            SCRATCH.with_borrow_mut(|slot| *slot = scratch);
-            steps
+            with_scratch(&SCRATCH, |s| {
+                band_steps(model, band, &gp_weights, convex, s)
+            })
         })
         .collect();
     model.verify()?;
