@@ -39,10 +39,10 @@ pub const DEFAULT_CONTOURS: u32 = 12;
 /// integrated with 1024 quadrature samples at its nodes (several times
 /// faster than integrating every pixel, and no less accurate: a few per
 /// cent off at worst); else every pixel is integrated from 256 samples.
-/// --samples S always integrates per pixel. Once `brdf-atlas prepare MODEL` has saved the prepared map
-/// (MODEL.lattice), every map's pixels inside the default view are drawn
-/// from it: a fraction of a second, within its tolerance of the exact
-/// albedos.
+/// --samples S always integrates per pixel. Once `brdf-atlas prepare
+/// MODEL` has saved the prepared map (MODEL.lattice), every map's pixels
+/// inside the default view are drawn from it: a fraction of a second,
+/// within its tolerance of the exact albedos.
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
     /// Model file written by `fit` (q = 2).
