@@ -299,7 +299,8 @@ impl Atlas {
     /// [`DEFAULT_SAMPLES`](crate::DEFAULT_SAMPLES) would, and at least
     /// [`MIN_NODES`].
     pub fn sampled_field_budget(&self, pixels: usize) -> usize {
-        let rows = self.plan_rows().rows.len() + self.pixel_rule(FIELD_SAMPLES).rows.rows.len();
+        let plan = self.pixel_rule(crate::DEFAULT_SAMPLES);
+        let rows = plan.rows.rows.len() + self.pixel_rule(FIELD_SAMPLES).rows.rows.len();
         let per_pixel = 3.0 * crate::DEFAULT_SAMPLES as f64;
         ((pixels as f64 * per_pixel / rows.max(1) as f64) as usize).max(MIN_NODES)
     }
@@ -326,7 +327,8 @@ impl Atlas {
         progress: &dyn Progress,
     ) -> Result<Option<usize>> {
         let cap = PLAN_FACTOR.saturating_mul(budget);
-        let plan = self.albedo_patches(domain, cap, self.plan_rows(), floor, progress)?;
+        let rows = &self.pixel_rule(crate::DEFAULT_SAMPLES).rows;
+        let plan = self.albedo_patches(domain, cap, rows, floor, progress)?;
         Ok(plan.map(|(_, nodes)| nodes))
     }
 
@@ -424,7 +426,8 @@ impl Atlas {
         floor: bool,
         progress: &dyn Progress,
     ) -> Result<Option<AlbedoField>> {
-        let plan = self.albedo_patches(domain, budget, self.plan_rows(), floor, progress)?;
+        let rows = &self.pixel_rule(crate::DEFAULT_SAMPLES).rows;
+        let plan = self.albedo_patches(domain, budget, rows, floor, progress)?;
         let Some((mut albedo, nodes)) = plan else {
             return Ok(None);
         };

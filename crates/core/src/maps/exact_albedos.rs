@@ -142,19 +142,6 @@ impl Atlas {
             })
     }
 
-    /// The rows of the map's per-pixel rule (the default sample count), with
-    /// which a field is planned before its exact nodes are paid for; built once.
-    pub(crate) fn plan_rows(&self) -> &RuleRows {
-        self.plan_rows.get_or_init(|| {
-            let rule = Quadrature::with_samples_shaped(
-                self.model.albedo_rule(),
-                DEFAULT_SAMPLES,
-                self.shape(),
-            );
-            self.rows_of(&rule)
-        })
-    }
-
     /// The store rows `rule` reads (measured ones only, channel-major), with
     /// the rule's weight times the inverse transform's scale.
     pub(crate) fn rows_of(&self, rule: &Quadrature) -> RuleRows {

@@ -69,9 +69,6 @@ pub struct Atlas {
     rule_rows: OnceLock<exact_albedos::RuleRows>,
     /// The rows of the map's nodes: the dense rule on fewer phi_d bins.
     node_rows: OnceLock<exact_albedos::RuleRows>,
-    /// The rows of the map's per-pixel rule at its default sample count,
-    /// which plan a field.
-    plan_rows: OnceLock<exact_albedos::RuleRows>,
     /// The last albedo fields built, and domains given up.
     fields: Recent<albedo_field::Cached>,
     /// The map's last per-pixel rules, one a sample count.
@@ -107,7 +104,6 @@ impl Atlas {
             shape: OnceLock::new(),
             rule_rows: OnceLock::new(),
             node_rows: OnceLock::new(),
-            plan_rows: OnceLock::new(),
             fields: Recent::default(),
             pixel_rules: Recent::default(),
             lattice: OnceLock::new(),
