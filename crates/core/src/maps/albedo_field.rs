@@ -103,7 +103,7 @@ pub const PLAN_FACTOR: usize = 4;
 /// 100 NBRDF-derived materials a 1024 x 1024 map of the default view so
 /// drawn is 5.3% off the dense rule at worst and 0.66% on average at 64
 /// random points, where integrating every pixel with the default 256
-/// samples is 7.9% and 0.92% off and takes twice as long
+/// samples is 7.9% and 0.92% off and takes three times as long
 /// (docs/performance.md, "Sampled fields").
 pub const FIELD_SAMPLES: usize = 1024;
 /// Nodes of a sampled field integrated in one pass over its rule's rows.
