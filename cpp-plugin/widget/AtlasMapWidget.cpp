@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <exception>
 
 namespace {
@@ -316,6 +317,13 @@ bool AtlasMapView::show(const MapResult &r) {
     if (r.generation == generation_) {
         const double ms = moved_.nsecsElapsed() / 1e6;
         latencyMs_[r.level == kFull ? 1 : 0] = ms;
+        // BRDF_ATLAS_PLUGIN_TIMINGS=1: each frame's latency on stderr, for
+        // timing the panel in a running BRDF Explorer.
+        static const bool timings = qEnvironmentVariableIsSet("BRDF_ATLAS_PLUGIN_TIMINGS");
+        if (timings) {
+            fprintf(stderr, "brdf-atlas panel: %dx%d %s shown %.1f ms after the last move\n",
+                    r.image.width(), r.image.height(), r.level == kFull ? "map" : "preview", ms);
+        }
         emit frameShown(r.level, ms);
     }
     return true;
