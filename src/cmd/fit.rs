@@ -15,6 +15,10 @@ use brdf_atlas_core::{
     FitOptions, FitReport, StorePolicy, default_kernel, fit_dir_with, store_path_for,
 };
 
+use std::time::{Duration, Instant};
+
+use brdf_atlas_core::{AlbedoMethod, Atlas, BlendRule, Model, View};
+
 use crate::args::{OptimizerArg, PrecisionArg, TransformArg};
 use crate::error::Error;
 use crate::format::{cost, secs, size};
@@ -75,6 +79,12 @@ pub struct Args {
     /// Hooke-Jeeves stops when its step falls below this.
     #[arg(long, default_value_t = DEFAULT_MIN_STEP, allow_negative_numbers = true)]
     pub min_step: f64,
+    /// Do not build the map's field of the default view after the fit (by
+    /// default it is built, about as long again as a fit of 100 materials,
+    /// and saved beside the model as MODEL.fields, so that the first map
+    /// in any program only evaluates it).
+    #[arg(long)]
+    pub no_map_field: bool,
     /// Build the store anew even when the model's own can be used again. A
     /// re-fit into the same model of the same files, unchanged since, with
     /// the same `--transform` and `--store-precision`, otherwise skips the
@@ -99,6 +109,7 @@ impl Args {
             noise: None,
             learn_kernel: false,
             min_step: DEFAULT_MIN_STEP,
+            no_map_field: false,
             rebuild_store: false,
         }
     }
@@ -140,6 +151,20 @@ pub struct Fitted {
     pub report: FitReport,
     /// The store as written (dims, size).
     pub store: Store,
+    /// The map's field of the default view built after the fit, if it was.
+    pub field: Option<MapField>,
+}
+
+/// The map's field `fit` built for the default view and saved beside the model.
+pub struct MapField {
+    /// What a 1024 x 1024 map of the default view draws from: `Field` or
+    /// `SampledField`; `None` when neither fits its budget (the map
+    /// integrates every pixel).
+    pub method: Option<AlbedoMethod>,
+    /// The file written (`MODEL.fields`), if any.
+    pub saved: Option<PathBuf>,
+    /// The time taken.
+    pub time: Duration,
 }
 
 /// Fit and write the model; nothing is printed but progress bars.
@@ -199,7 +224,33 @@ pub fn fit(args: &Args) -> Result<Fitted, Error> {
         }
     };
     let store = Store::open(&report.store_path)?;
-    Ok(Fitted { report, store })
+    let field = if args.no_map_field || report.fit.outcome.latent.ncols() != 2 {
+        None
+    } else {
+        Some(map_field(&report.model_path)?)
+    };
+    Ok(Fitted {
+        report,
+        store,
+        field,
+    })
+}
+
+/// Build the map's field of the default view (a 1024 x 1024 map's, of the
+/// default material) and save it beside the model ([`Atlas::prepare_fields`]).
+fn map_field(model: &Path) -> Result<MapField, Error> {
+    let t0 = Instant::now();
+    let atlas = Atlas::new(Model::open(model)?);
+    let bars = Bars::new("the map's field of the default view");
+    let size = crate::cmd::map::DEFAULT_SIZE as usize;
+    let prepared = atlas.prepare_fields((size, size, View::default()), BlendRule::default(), &bars);
+    drop(bars);
+    let (method, saved) = prepared?;
+    Ok(MapField {
+        method,
+        saved,
+        time: t0.elapsed(),
+    })
 }
 
 /// `.binary` files in `dir` as the library counts them, or `None` when the
@@ -307,6 +358,9 @@ pub fn write_summary(out: &mut impl Write, args: &Args, fitted: &Fitted) -> io::
         )?;
     }
     write_fidelity(out, &r.fidelity, &r.names)?;
+    if let Some(f) = &fitted.field {
+        write_map_field(out, f)?;
+    }
     let total = r.scan_time + r.store_time + r.optimise_time + r.fidelity_time + r.save_time;
     writeln!(
         out,
@@ -322,6 +376,32 @@ pub fn write_summary(out: &mut impl Write, args: &Args, fitted: &Fitted) -> io::
         secs(r.fidelity_time),
         secs(r.save_time),
         secs(total)
+    )
+}
+
+/// The map's field built after the fit, and where it went.
+fn write_map_field(out: &mut impl Write, f: &MapField) -> io::Result<()> {
+    let what = match f.method {
+        Some(AlbedoMethod::Field { nodes, .. }) => format!("exact albedos at {nodes} nodes"),
+        Some(AlbedoMethod::SampledField { samples, nodes, .. }) => {
+            format!("albedos integrated with {samples} quadrature samples at {nodes} nodes")
+        }
+        _ => {
+            return writeln!(
+                out,
+                "  map field  none within its budget: maps of the default view integrate every pixel ({})",
+                secs(f.time)
+            );
+        }
+    };
+    let saved = match &f.saved {
+        Some(path) => format!("saved in {}", path.display()),
+        None => "already saved beside the model".into(),
+    };
+    writeln!(
+        out,
+        "  map field  the default view's: {what}, {saved}, {} (the first map only evaluates it)",
+        secs(f.time)
     )
 }
 

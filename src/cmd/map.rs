@@ -20,6 +20,8 @@ use crate::progress::Bars;
 
 /// `--contours` when not given.
 pub const DEFAULT_CONTOURS: u32 = 12;
+/// `--size` when not given.
+pub const DEFAULT_SIZE: u32 = 1024;
 
 /// Draw the albedo map of a 2-D latent space.
 ///
@@ -39,7 +41,10 @@ pub const DEFAULT_CONTOURS: u32 = 12;
 /// integrated with 1024 quadrature samples at its nodes (several times
 /// faster than integrating every pixel, and no less accurate: a few per
 /// cent off at worst); else every pixel is integrated from 256 samples.
-/// --samples S always integrates per pixel. Once `brdf-atlas prepare
+/// --samples S always integrates per pixel. `fit` saves the default view's
+/// field beside the model (MODEL.fields) and `map` adds those it builds, so
+/// that later maps, in any program, start from them; a view inside a saved
+/// field's region is drawn from it. Once `brdf-atlas prepare
 /// MODEL` has saved the prepared map (MODEL.lattice), every map's pixels
 /// inside the default view are drawn from it: a fraction of a second,
 /// within its tolerance of the exact albedos.
@@ -58,7 +63,7 @@ pub struct Args {
     #[arg(long, value_name = "JSON")]
     pub json: Option<PathBuf>,
     /// Width and height in pixels.
-    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..=MAX_MAP_SIDE as i64))]
+    #[arg(long, default_value_t = DEFAULT_SIZE, value_parser = clap::value_parser!(u32).range(1..=MAX_MAP_SIDE as i64))]
     pub size: u32,
     /// Number of luminance contour lines.
     #[arg(long, default_value_t = DEFAULT_CONTOURS, value_parser = clap::value_parser!(u32).range(0..=1000))]
@@ -231,6 +236,14 @@ pub fn draw(
     }
     staged.push(map_picture::stage_sidecar(&json, &sidecar)?);
     commit_all(staged)?;
+    // The field the map was drawn from, for the next map in any program.
+    let saved = match model.save_fields() {
+        Ok(saved) => saved,
+        Err(e) => {
+            eprintln!("note: {e}; the map's field is not saved beside the model");
+            None
+        }
+    };
     writeln!(
         report,
         "map {size}x{size} of {}{blend} over x {}..{}, y {}..{}: {method}, {}",
@@ -265,6 +278,13 @@ pub fn draw(
         100.0 * low as f64 / variance.len().max(1) as f64
     )?;
     writeln!(report, "  wrote {} (sRGB)", args.png.display())?;
+    if let Some(path) = saved {
+        writeln!(
+            report,
+            "  saved the map's field in {} (later maps of the model start from it)",
+            path.display()
+        )?;
+    }
     if let Some(exr) = &args.exr {
         writeln!(
             report,
@@ -287,6 +307,9 @@ pub fn run(args: &Args) -> Result<ExitCode, Error> {
     let model = brdf_atlas_core::Atlas::new(Model::open(&args.model)?);
     if let Err(e) = model.prepared_map() {
         eprintln!("note: {e}; the map is drawn without it");
+    }
+    if let Err(e) = model.saved_fields() {
+        eprintln!("note: {e}; the map builds its field anew");
     }
     draw(&model, args, &mut io::stdout().lock())?;
     Ok(ExitCode::SUCCESS)

@@ -66,7 +66,7 @@ pub use locate::Located;
 pub use maps::{
     AlbedoField, AlbedoLattice, AlbedoMap, AlbedoMethod, AlbedoRequest, Atlas, DEFAULT_SAMPLES,
     FIELD_SAMPLES, FieldRequest, Integration, LATTICE_TOLERANCE, MapRequest, NODE_PHI_D_STEP,
-    Segment, View, contour_levels, contours, lattice_path, luminance,
+    Segment, View, contour_levels, contours, fields_path, lattice_path, luminance,
 };
 pub use maps::{albedo_field, lattice, map_error};
 pub use model::blend::soft_floor;

@@ -7,8 +7,8 @@ use std::time::Instant;
 
 use brdf_atlas_core::map_error::{albedo_error, map_error};
 use brdf_atlas_core::{
-    AlbedoMethod, AlbedoRequest, Atlas, BlendRule, DEFAULT_SAMPLES, Integration, LATTICE_TOLERANCE,
-    NODE_PHI_D_STEP, NoProgress, View,
+    AlbedoMethod, AlbedoRequest, Atlas, BlendRule, DEFAULT_SAMPLES, FIELD_SAMPLES, Integration,
+    LATTICE_TOLERANCE, NODE_PHI_D_STEP, NoProgress, View,
 };
 
 use brdf_merl::Quadrature;
@@ -71,7 +71,8 @@ const RULE_SEED: u64 = 5;
 /// random points of the default view from one pass a rule, against the
 /// dense rule's: the map's nodes' rule, reduced rules that integrate a
 /// cubic or linear interpolant through every few theta_d and phi_d bins,
-/// and Monte Carlo sampling of the dense rule.
+/// the per-pixel rule and the sampled field's nodes' rule (one bin standing
+/// for each box of bins), and Monte Carlo sampling of the dense rule.
 pub fn rules(model: &Atlas, plan: &Plan, r: &mut Results) -> Result<(), Error> {
     let view = View::default();
     let mut rng = brdf_merl::synth::SplitMix64::new(RULE_SEED);
@@ -111,6 +112,14 @@ pub fn rules(model: &Atlas, plan: &Plan, r: &mut Results) -> Result<(), Error> {
         (
             "linear interpolant, every 3rd theta_d and 6th phi_d bin".into(),
             model.reduced_rule(3, 6, false),
+        ),
+        (
+            format!("{DEFAULT_SAMPLES} samples, one bin a box (the per-pixel rule)"),
+            Quadrature::with_samples_shaped(&dense, DEFAULT_SAMPLES, model.shape()),
+        ),
+        (
+            format!("{FIELD_SAMPLES} samples, one bin a box (the sampled field's nodes)"),
+            Quadrature::with_samples_shaped(&dense, FIELD_SAMPLES, model.shape()),
         ),
         (
             "Monte Carlo, 4096 bins drawn by weight".into(),

@@ -53,10 +53,15 @@
 //! default view's side) starting at multiples of half their length from the
 //! default view's corner. So the domain is at most four times the view, a
 //! zoomed view gets a small, nearly linear domain that needs few nodes, and
-//! the domain depends on the view only: the map is a function of (model,
-//! view, size), not of what was drawn before. The model keeps the last
-//! fields it built ([`FIELD_CACHE`]), so a viewer that pans and zooms inside
-//! one domain pays for its nodes once.
+//! the domain depends on the view only. The model keeps the last fields it
+//! built ([`FIELD_CACHE`]), and those saved beside it
+//! ([`crate::maps::saved_fields`]), so a viewer that pans and zooms inside
+//! one domain pays for its nodes once; a view inside the domain of a field
+//! held is drawn from it (the exact field of the smallest such domain,
+//! else the sampled one) instead of a field of its own domain
+//! ([`Atlas::map_field`]). So a map depends on the fields held as well as
+//! on (model, view, size), within the fields' accuracy: the same fields
+//! give the same bits whatever the thread count.
 
 use std::sync::Arc;
 
@@ -268,7 +273,7 @@ impl Atlas {
         let domain = domain_of(view);
         let same = |f: &Cached| f.domain == domain && f.floor == floor && f.samples == samples;
         let cached = |f: &Cached| same(f) && (f.field.is_some() || f.budget >= budget);
-        if let Some(f) = self.fields.find(cached) {
+        if let Some(f) = self.find_cached(cached) {
             return Ok(f.field.clone());
         }
         let field = build(domain, floor)?.map(Arc::new);
@@ -281,6 +286,89 @@ impl Atlas {
         });
         self.fields.keep(entry, FIELD_CACHE, cached, same);
         Ok(field)
+    }
+
+    /// The kept entry (built in this process, or saved beside the model,
+    /// [`Atlas::saved_fields`]) for which `wanted` holds.
+    fn find_cached(&self, wanted: impl Fn(&Cached) -> bool) -> Option<Arc<Cached>> {
+        self.fields.find(&wanted).or_else(|| {
+            let saved = self.loaded_fields().unwrap_or_default();
+            saved.into_iter().find(|c| wanted(c))
+        })
+    }
+
+    /// The kept field (exact if `samples` is `None`, else sampled with
+    /// that many samples) of `rule`'s material whose domain holds `view`:
+    /// the one of the smallest domain.
+    fn covering_field(
+        &self,
+        view: View,
+        floor: bool,
+        samples: Option<usize>,
+    ) -> Option<Arc<AlbedoField>> {
+        let holds = |c: &Cached| {
+            let d = c.domain;
+            c.field.is_some()
+                && c.floor == floor
+                && c.samples == samples
+                && d.x0 <= view.x0
+                && view.x1 <= d.x1
+                && d.y0 <= view.y0
+                && view.y1 <= d.y1
+        };
+        let area = |f: &AlbedoField| {
+            let d = f.domain();
+            (d.x1 - d.x0) * (d.y1 - d.y0)
+        };
+        let saved = self.loaded_fields().unwrap_or_default();
+        self.fields
+            .all()
+            .iter()
+            .chain(&saved)
+            .filter(|c| holds(c))
+            .filter_map(|c| c.field.clone())
+            .min_by(|a, b| area(a).total_cmp(&area(b)))
+    }
+
+    /// The field a `pixels`-pixel map of `view` of `rule`'s material draws
+    /// from, with the sample count of its nodes (`None`: exact), or `None`
+    /// when the map integrates every pixel. In this order: an exact field
+    /// the atlas holds whose domain holds the view; the exact field of the
+    /// view's domain within its budget ([`Atlas::field_budget`]); a sampled
+    /// field held whose domain holds the view (a zoom inside the default
+    /// view after the default view's field was built or read from beside
+    /// the model); the sampled field of the view's domain within its
+    /// budget ([`Atlas::sampled_field_budget`]).
+    pub(crate) fn map_field(
+        &self,
+        view: View,
+        pixels: usize,
+        rule: BlendRule,
+        progress: &dyn Progress,
+    ) -> Result<Option<(Arc<AlbedoField>, Option<usize>)>> {
+        let floor = floor_of(rule)?;
+        if let Some(field) = self.covering_field(view, floor, None) {
+            return Ok(Some((field, None)));
+        }
+        let budget = self.field_budget(pixels, crate::DEFAULT_SAMPLES);
+        let request = FieldRequest {
+            view,
+            budget,
+            rule,
+            progress,
+        };
+        if let Some(field) = self.field(request)? {
+            return Ok(Some((field, None)));
+        }
+        let sampled = Some(FIELD_SAMPLES);
+        if let Some(field) = self.covering_field(view, floor, sampled) {
+            return Ok(Some((field, sampled)));
+        }
+        let budget = self.sampled_field_budget(pixels);
+        let request = FieldRequest { budget, ..request };
+        Ok(self
+            .sampled_field(request, FIELD_SAMPLES)?
+            .map(|field| (field, sampled)))
     }
 
     /// The node budget of a `pixels`-pixel map's field: as many exact
@@ -478,15 +566,23 @@ impl Atlas {
 }
 
 /// A domain's field, or that it has none within `budget` nodes, as the
-/// model keeps it.
+/// model keeps it (and saves it beside the model,
+/// [`crate::maps::saved_fields`]).
 pub(crate) struct Cached {
-    domain: View,
+    pub(crate) domain: View,
     /// Every value on its soft floor ([`BlendRule::Floor`]).
-    floor: bool,
+    pub(crate) floor: bool,
     /// The sample count of a sampled field's nodes; `None` for the nodes' rule.
-    samples: Option<usize>,
-    budget: usize,
-    field: Option<Arc<AlbedoField>>,
+    pub(crate) samples: Option<usize>,
+    pub(crate) budget: usize,
+    pub(crate) field: Option<Arc<AlbedoField>>,
+}
+
+impl Cached {
+    /// The same domain, material and node rule as `other`.
+    pub(crate) fn same(&self, other: &Cached) -> bool {
+        self.domain == other.domain && self.floor == other.floor && self.samples == other.samples
+    }
 }
 
 /// The predictive variance `1 - |L^-1 k|^2` (`K = L L^T`) of each column `k`
@@ -505,6 +601,21 @@ pub(crate) fn variances(inv: &[f64], kx: &[f64], n: usize, out: &mut [f32]) {
 }
 
 impl AlbedoField {
+    /// A field from its parts (as saved beside the model).
+    pub(crate) fn from_parts(
+        domain: View,
+        albedo: Vec<Patch>,
+        variance: Vec<Patch>,
+        nodes: usize,
+    ) -> AlbedoField {
+        AlbedoField {
+            domain,
+            albedo,
+            variance,
+            nodes,
+        }
+    }
+
     /// The albedo patches, for [`eval_row`].
     pub(crate) fn albedo_patches(&self) -> &[Patch] {
         &self.albedo

@@ -29,7 +29,6 @@ use crate::dense::product::matmul;
 use crate::error::{CoreError, Result};
 use crate::maps::Atlas;
 use crate::maps::albedo_field::variances;
-use crate::maps::albedo_field::{FIELD_SAMPLES, FieldRequest};
 use crate::maps::exact_albedos::pixel_terms;
 use crate::maps::lattice::AlbedoLattice;
 use crate::maps::patches::eval_row;
@@ -197,6 +196,26 @@ impl<'a> MapRequest<'a> {
     }
 }
 
+impl AlbedoMethod {
+    /// The method of a map drawn from `field`, whose nodes are exact
+    /// (`sampled` is `None`) or integrated with `sampled` samples.
+    pub(crate) fn of_field(field: &crate::AlbedoField, sampled: Option<usize>) -> AlbedoMethod {
+        match sampled {
+            None => AlbedoMethod::Field {
+                nodes: field.nodes(),
+                patches: field.patches(),
+                estimate: field.estimate(),
+            },
+            Some(samples) => AlbedoMethod::SampledField {
+                samples,
+                nodes: field.nodes(),
+                patches: field.patches(),
+                estimate: field.estimate(),
+            },
+        }
+    }
+}
+
 impl Atlas {
     /// Per-material albedos in transformed space (rows of `A`) and the albedo
     /// of the mean, with `rule`; linear transforms only make this an albedo.
@@ -359,24 +378,7 @@ impl Atlas {
         // The exact field where it fits its budget, else the sampled one
         // where that fits its own; else every pixel is integrated.
         let field = match samples {
-            None if !linear => {
-                let budget = self.field_budget(width * height, DEFAULT_SAMPLES);
-                let request = FieldRequest {
-                    view,
-                    budget,
-                    rule,
-                    progress,
-                };
-                match self.field(request)? {
-                    Some(field) => Some((field, None)),
-                    None => {
-                        let budget = self.sampled_field_budget(width * height);
-                        let request = FieldRequest { budget, ..request };
-                        self.sampled_field(request, FIELD_SAMPLES)?
-                            .map(|field| (field, Some(FIELD_SAMPLES)))
-                    }
-                }
-            }
+            None if !linear => self.map_field(view, width * height, rule, progress)?,
             _ => None,
         };
         let samples = match samples {
@@ -404,19 +406,7 @@ impl Atlas {
                         });
                         progress.advance(1);
                     });
-                match sampled {
-                    None => AlbedoMethod::Field {
-                        nodes: field.nodes(),
-                        patches: field.patches(),
-                        estimate: field.estimate(),
-                    },
-                    Some(samples) => AlbedoMethod::SampledField {
-                        samples,
-                        nodes: field.nodes(),
-                        patches: field.patches(),
-                        estimate: field.estimate(),
-                    },
-                }
+                AlbedoMethod::of_field(&field, sampled)
             }
             (None, None) => {
                 let (cols, m) = self.linear_basis();

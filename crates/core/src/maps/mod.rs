@@ -16,12 +16,14 @@ pub mod map_error;
 mod patches;
 mod pixel_rule;
 mod prepared_map;
+pub mod saved_fields;
 mod view;
 
 pub use albedo_map::{AlbedoMap, AlbedoMethod, DEFAULT_SAMPLES, View};
 pub use contour::{Segment, contour_levels, contours, luminance};
 pub use exact_albedos::NODE_PHI_D_STEP;
 pub use lattice::{AlbedoLattice, LATTICE_TOLERANCE, lattice_path};
+pub use saved_fields::fields_path;
 
 use std::sync::{Arc, OnceLock};
 
@@ -75,6 +77,8 @@ pub struct Atlas {
     pixel_rules: Recent<pixel_rule::PixelRule>,
     /// The prepared map saved beside the model, read on first use.
     lattice: OnceLock<lattice::Loaded>,
+    /// The fields saved beside the model, read on first use.
+    saved: saved_fields::Slot,
 }
 
 impl std::fmt::Debug for Atlas {
@@ -107,6 +111,7 @@ impl Atlas {
             fields: Recent::default(),
             pixel_rules: Recent::default(),
             lattice: OnceLock::new(),
+            saved: saved_fields::Slot::default(),
         }
     }
 

@@ -23,6 +23,11 @@ impl<T> Recent<T> {
         self.lock().iter().find(|v| wanted(v)).cloned()
     }
 
+    /// Every kept value, oldest first.
+    pub(crate) fn all(&self) -> Vec<Arc<T>> {
+        self.lock().clone()
+    }
+
     /// Keep `item`, unless a value for which `wanted` holds was kept
     /// meanwhile (by another thread): first drop the kept values that `item`
     /// replaces, then the oldest values while `cap` or more are kept.
