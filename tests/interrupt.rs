@@ -211,7 +211,7 @@ fn fit_interrupted_by_sigint_or_sigterm_changes_nothing() {
     let model = out.path().join("a.model");
     run(&fit_args(m, &model));
     let before = listing(out.path());
-    assert_eq!(names(&before), ["a.model", "a.model.store"]);
+    assert_eq!(names(&before), ["a.fields", "a.model", "a.model.store"]);
     let args = fit_args(m, &model);
     for (phase, signal, code) in [
         ("store", libc::SIGINT, 130),

@@ -34,6 +34,11 @@ pub const NODE_PHI_D_STEP: usize = 8;
 
 /// Rows of the store a step of the exact pass multiplies at once.
 const BLOCK: usize = 256;
+/// The most point weights (points times materials) a pass holds: 4 M, 32 MB
+/// a matrix (a field's refinement asks tens of thousands of points at
+/// once; with a thousand materials their weights alone once took a fit
+/// past 1 GB).
+const MAX_WEIGHTS: usize = 1 << 22;
 
 /// The rows of the store a rule (the dense one, or a map's per-pixel one)
 /// reads, with what turns a row's reconstructed value into its share of the
@@ -216,11 +221,22 @@ impl Atlas {
         floor: bool,
     ) -> Result<Vec<[f64; 3]>> {
         self.model.store().verify_cheap()?;
+        let n = self.model.latent().nrows();
+        // The points' weights are `m x n`: past `MAX_WEIGHTS` the points go
+        // in chunks, a pass each (each point's sum is the same whatever
+        // the chunks).
+        let chunk = (MAX_WEIGHTS / n.max(1)).max(1);
+        if points.len() > chunk {
+            let mut out = Vec::with_capacity(points.len());
+            for part in points.chunks(chunk) {
+                out.extend(self.albedos_over(rule, part, floor)?);
+            }
+            return Ok(out);
+        }
         let m = points.len();
         if m == 0 {
             return Ok(Vec::new());
         }
-        let n = self.model.latent().nrows();
         let PassWeights {
             gp: a,
             convex: av,

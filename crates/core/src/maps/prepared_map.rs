@@ -20,10 +20,15 @@ use crate::model::blend::plausibility::BlendRule;
 use crate::progress::Progress;
 
 impl Atlas {
-    /// A fingerprint of the fit (its model file's content): a lattice built
-    /// from another fit is not used.
+    /// A fingerprint of the fit (its model file's content, less which file
+    /// its store is: a re-fit that builds the same store again keeps it): a
+    /// lattice or saved fields of another fit are not used.
     pub fn fingerprint(&self) -> String {
-        let text = serde_json::to_vec(self.model.file()).unwrap_or_default();
+        let mut file = serde_json::to_value(self.model.file()).unwrap_or_default();
+        if let Some(store) = file.get_mut("store").and_then(|s| s.as_object_mut()) {
+            store.remove("identity");
+        }
+        let text = serde_json::to_vec(&file).unwrap_or_default();
         format!("{:016x}", xxhash_rust::xxh3::xxh3_64(&text))
     }
 
