@@ -21,6 +21,10 @@ namespace {
 constexpr double kDragThreshold = 3.0;
 // One wheel notch (120 units) zooms by 2^(1/4).
 constexpr double kNotchZoom = 0.25;
+// The full map starts once the window has stood still this long (ms): a
+// map drawn from the model's field takes tens of milliseconds, and one
+// whose window is left is cancelled, so waiting longer only adds latency.
+constexpr int kSettleMs = 50;
 
 float srgb(float v) {
     v = std::min(std::max(v, 0.0f), 1.0f);
@@ -63,7 +67,7 @@ AtlasMapView::AtlasMapView(QWidget *parent)
     setSizePolicy(QSizePolicy::Expanding, QSizePolicy::Expanding);
     setCursor(Qt::CrossCursor);
     debounce_.setSingleShot(true);
-    debounce_.setInterval(120);
+    debounce_.setInterval(kSettleMs);
     connect(&debounce_, &QTimer::timeout, this, &AtlasMapView::startFull);
     connect(previewWatcher_, &QFutureWatcher<MapResult>::finished, this,
             &AtlasMapView::previewFinished);

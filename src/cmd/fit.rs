@@ -79,10 +79,11 @@ pub struct Args {
     /// Hooke-Jeeves stops when its step falls below this.
     #[arg(long, default_value_t = DEFAULT_MIN_STEP, allow_negative_numbers = true)]
     pub min_step: f64,
-    /// Do not build the map's field of the default view after the fit (by
-    /// default it is built, about as long again as a fit of 100 materials,
-    /// and saved beside the model as MODEL.fields, so that the first map
-    /// in any program only evaluates it).
+    /// Do not build the map's fields after the fit (by default those of
+    /// the default view and of [-3, 3]^2 are built, about as long again as
+    /// a fit of 100 materials, and saved beside the model as MODEL.fields,
+    /// so that the first map of any view inside either, in any program,
+    /// only evaluates them).
     #[arg(long)]
     pub no_map_field: bool,
     /// Build the store anew even when the model's own can be used again. A
@@ -157,10 +158,10 @@ pub struct Fitted {
 
 /// The map's field `fit` built for the default view and saved beside the model.
 pub struct MapField {
-    /// What a 1024 x 1024 map of the default view draws from: `Field` or
-    /// `SampledField`; `None` when neither fits its budget (the map
-    /// integrates every pixel).
-    pub method: Option<AlbedoMethod>,
+    /// What a 1024 x 1024 map of each view (the default one, then
+    /// [`View::wide`]) draws from: `Field` or `SampledField`; `None` when
+    /// neither fits its budget (the map integrates every pixel).
+    pub methods: Vec<(&'static str, Option<AlbedoMethod>)>,
     /// The file written (`MODEL.fields`), if any.
     pub saved: Option<PathBuf>,
     /// The time taken.
@@ -236,18 +237,29 @@ pub fn fit(args: &Args) -> Result<Fitted, Error> {
     })
 }
 
-/// Build the map's field of the default view (a 1024 x 1024 map's, of the
-/// default material) and save it beside the model ([`Atlas::prepare_fields`]).
+/// Build the map's fields of the default view and of [`View::wide`] (a
+/// 1024 x 1024 map's, of the default material) and save them beside the
+/// model ([`Atlas::prepare_fields`]): every view inside either's domain
+/// (the map panel's too) is then drawn from them.
 fn map_field(model: &Path) -> Result<MapField, Error> {
     let t0 = Instant::now();
     let atlas = Atlas::new(Model::open(model)?);
-    let bars = Bars::new("the map's field of the default view");
     let size = crate::cmd::map::DEFAULT_SIZE as usize;
-    let prepared = atlas.prepare_fields((size, size, View::default()), BlendRule::default(), &bars);
-    drop(bars);
-    let (method, saved) = prepared?;
+    let mut methods = Vec::new();
+    let mut saved = None;
+    for (name, view) in [
+        ("the default view", View::default()),
+        ("[-3, 3]^2", View::wide()),
+    ] {
+        let bars = Bars::new(format!("the map's field of {name}"));
+        let prepared = atlas.prepare_fields((size, size, view), BlendRule::default(), &bars);
+        drop(bars);
+        let (method, path) = prepared?;
+        methods.push((name, method));
+        saved = path.or(saved);
+    }
     Ok(MapField {
-        method,
+        methods,
         saved,
         time: t0.elapsed(),
     })
@@ -379,28 +391,29 @@ pub fn write_summary(out: &mut impl Write, args: &Args, fitted: &Fitted) -> io::
     )
 }
 
-/// The map's field built after the fit, and where it went.
+/// The map's fields built after the fit, and where they went.
 fn write_map_field(out: &mut impl Write, f: &MapField) -> io::Result<()> {
-    let what = match f.method {
-        Some(AlbedoMethod::Field { nodes, .. }) => format!("exact albedos at {nodes} nodes"),
-        Some(AlbedoMethod::SampledField { samples, nodes, .. }) => {
-            format!("albedos integrated with {samples} quadrature samples at {nodes} nodes")
-        }
-        _ => {
-            return writeln!(
-                out,
-                "  map field  none within its budget: maps of the default view integrate every pixel ({})",
-                secs(f.time)
-            );
-        }
-    };
+    let what: Vec<String> = f
+        .methods
+        .iter()
+        .map(|(view, method)| match *method {
+            Some(AlbedoMethod::Field { nodes, .. }) => {
+                format!("{view}'s exact albedos at {nodes} nodes")
+            }
+            Some(AlbedoMethod::SampledField { samples, nodes, .. }) => {
+                format!("{view}'s albedos integrated with {samples} samples at {nodes} nodes")
+            }
+            _ => format!("none for {view} within its budget (its maps integrate every pixel)"),
+        })
+        .collect();
     let saved = match &f.saved {
         Some(path) => format!("saved in {}", path.display()),
         None => "already saved beside the model".into(),
     };
     writeln!(
         out,
-        "  map field  the default view's: {what}, {saved}, {} (the first map only evaluates it)",
+        "  map field  {}; {saved}, {} (the first maps only evaluate them)",
+        what.join(", "),
         secs(f.time)
     )
 }

@@ -4,7 +4,8 @@
 //! build time and its error at seeded random points of the view against
 //! the dense rule over the full reconstruction of the default material,
 //! relative to each point's largest channel; for the default view and
-//! for [-3, 3]^2. `cargo run --release -p brdf-atlas-core --example
+//! for [-3, 3]^2 (whose field's error at the default view's points is
+//! shown too). `cargo run --release -p brdf-atlas-core --example
 //! sampled_field -- MODEL [POINTS] [SAMPLES,...]`.
 
 use brdf_atlas_core::map_error::albedo_error;
@@ -34,11 +35,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ),
     ];
     println!("view      samples    nodes  patches  estimate  build_s   max_err  mean_err");
-    for (name, view) in views {
+    let points_of = |view: View| {
         let mut rng = SplitMix64::new(7);
-        let points: Vec<[f64; 2]> = (0..count)
+        (0..count)
             .map(|_| [rng.range(view.x0, view.x1), rng.range(view.y0, view.y1)])
-            .collect();
+            .collect::<Vec<[f64; 2]>>()
+    };
+    let inner = points_of(View::default());
+    let inner_want = Atlas::new(Model::open(&path)?).exact_albedos(&inner, AlbedoRequest::new())?;
+    for (name, view) in views {
+        let points = points_of(view);
         let want = Atlas::new(Model::open(&path)?).exact_albedos(&points, AlbedoRequest::new())?;
         for &s in &samples {
             // A fresh atlas a rule: its rows are part of the first map's time.
@@ -57,6 +63,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 field.estimate(),
                 mean
             );
+            if view != View::default() {
+                // What the larger field gives inside the default view.
+                let got: Vec<[f64; 3]> = inner.iter().map(|p| field.at(*p).0).collect();
+                let (worst, mean) = albedo_error(&got, &inner_want);
+                println!("  its albedo at the default view's points: {worst:9.2e} {mean:9.2e}");
+            }
         }
     }
     Ok(())

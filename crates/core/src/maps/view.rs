@@ -47,6 +47,19 @@ impl View {
         }
     }
 
+    /// `[-3, 3]^2`: the default view zoomed out about three times, where
+    /// most of the picture is far from every material. `brdf-atlas fit`
+    /// saves its map's field beside the model with the default view's: its
+    /// domain holds the map panel's windows, wider than they are high.
+    pub fn wide() -> View {
+        View {
+            x0: -3.0,
+            x1: 3.0,
+            y0: -3.0,
+            y1: 3.0,
+        }
+    }
+
     /// Check the window is finite and not empty.
     pub fn check(&self) -> Result<()> {
         let ok = [self.x0, self.x1, self.y0, self.y1]
