@@ -603,6 +603,57 @@ enum BrdfAtlasStatus brdf_atlas_model_albedo_map_with(const struct BrdfAtlasMode
                                                       size_t len);
 
 /**
+ * How many entries (fields, and regions whose exact field was found over
+ * budget) the fields saved beside the model hold (`MODEL.fields`, written
+ * by `brdf-atlas fit` for the default view and [-3, 3]^2, by
+ * `brdf-atlas map` and by `brdf_atlas_model_prepare_map_fields`), into
+ * `*count`: 0 when there is no file. The model reads the file on its
+ * first map and draws every map it can from its fields: a view inside a
+ * saved field's region in a fraction of a second.
+ *
+ * Ownership: `model` is borrowed; `count` is caller-owned, written on
+ * success only.
+ *
+ * Returns OK, NULL_ARGUMENT, BAD_FILE (the file cannot be used: damaged,
+ * written for another fit, or unreadable; maps then build what they need,
+ * and the next save replaces it).
+ *
+ * # Safety
+ * `model` is NULL or a live handle; `count` is NULL or valid for writing.
+ */
+enum BrdfAtlasStatus brdf_atlas_model_saved_fields(const struct BrdfAtlasModel *model,
+                                                   size_t *count);
+
+/**
+ * Build the fields a `width` x `height` map of `view` (NULL: the default
+ * window) draws by default (`brdf_atlas_model_albedo_map`: the exact
+ * albedo field where it fits its budget, else the sampled field), of the
+ * default material, and save every field the model holds beside the model
+ * (`MODEL.fields`, atomically), so that later maps, in this program and
+ * in any other, start from them. What `brdf-atlas fit` does for the
+ * default view and for [-3, 3]^2: a viewer that opens a model without
+ * them (`brdf_atlas_model_saved_fields` gives 0 or BAD_FILE) can build
+ * them off its GUI thread, about 3 s for 100 materials on two cores, with
+ * a 1024 x 1024 map's budget. `cancel` is NULL (not cancellable) or a flag
+ * as in `brdf_atlas_model_albedo_map_cancellable`.
+ *
+ * Returns OK (also when no field fits the map's budget: such maps
+ * integrate every pixel, and nothing new is saved), NULL_ARGUMENT,
+ * INVALID_ARGUMENT (as `brdf_atlas_model_albedo_map`), UNSUPPORTED (the
+ * model is not 2-D), CANCELLED (nothing saved), IO (the file could not be
+ * written: the model keeps the fields for this program's maps).
+ *
+ * # Safety
+ * `model` is NULL or a live handle; `view` is NULL or valid for reading;
+ * `cancel` as in `brdf_atlas_model_albedo_map_with`.
+ */
+enum BrdfAtlasStatus brdf_atlas_model_prepare_map_fields(const struct BrdfAtlasModel *model,
+                                                         size_t width,
+                                                         size_t height,
+                                                         const struct BrdfAtlasView *view,
+                                                         const int32_t *cancel);
+
+/**
  * The GP's predictive variance (`1 - k(x)^T K^-1 k(x)`: 0 at an input
  * material, 1 where the data say nothing, above 0.5 the model knows
  * little) at every pixel of a `width` x `height` image of `view`, laid out

@@ -16,6 +16,7 @@
 // Every way a model fails to open is shown in the panel, naming the file.
 // Zoomed far out, the map fades where the model knows little, by the
 // library's rule, and a click there says so in the status line.
+// A model without its map's fields gets them built and saved beside it.
 // Last, a second panel on a copy of the model whose store is rewritten in
 // place while it is open: Validate and the map show the library's message,
 // the last reconstruction stays usable, and reopening the model recovers.
@@ -24,6 +25,7 @@
 // BRDF_ATLAS_ARTEFACTS (directory for the screenshot; default ".").
 // Run with QT_QPA_PLATFORM=offscreen on a machine without a display.
 #include <QComboBox>
+#include <QDateTime>
 #include <QDir>
 #include <QFile>
 #include <QJsonArray>
@@ -813,6 +815,56 @@ private slots:
             QVERIFY(panel.statusLabel()->styleSheet().contains("c03030"));
             QVERIFY(!panel.mapView()->model());
         }
+    }
+
+    void aModelWithoutFieldsGetsThemBuiltAndSaved() {
+        // A copy of the model without its saved fields (as from a library
+        // fit, or an older version's).
+        QTemporaryDir dir;
+        QVERIFY(dir.isValid());
+        // Same names: the model names its store.
+        const QString model = dir.filePath(QFileInfo(modelPath_).fileName());
+        QVERIFY(QFile::copy(modelPath_, model));
+        QVERIFY(QFile::copy(modelPath_ + QStringLiteral(".store"), model + QStringLiteral(".store")));
+        // MODEL.fields: the model's name with its last extension replaced.
+        const QString fields =
+            dir.filePath(QFileInfo(model).completeBaseName() + QStringLiteral(".fields"));
+        QVERIFY(!QFile::exists(fields));
+        QCOMPARE(brdf_atlas::Model(model.toStdString()).saved_fields(), std::size_t(0));
+
+        AtlasPanel panel;
+        panel.resize(360, 460);
+        panel.show();
+        QVERIFY(QTest::qWaitForWindowExposed(&panel));
+        QSignalSpy opened(&panel, &AtlasPanel::modelOpened);
+        panel.openModel(model);
+        // Built off the GUI thread, the busy bar showing, then saved.
+        QTRY_VERIFY_WITH_TIMEOUT(opened.count() == 1 && !panel.busy(), 120000);
+        QVERIFY2(QFile::exists(fields), qPrintable(panel.statusLabel()->text()));
+        QVERIFY(brdf_atlas::Model(model.toStdString()).saved_fields() >= 2);
+        // (The job's end reaches the panel through the event loop.)
+        QTRY_COMPARE_WITH_TIMEOUT(panel.statusLabel()->text(), QStringLiteral("Click the map, then Validate."),
+                                  10000);
+        QTRY_VERIFY_WITH_TIMEOUT(!panel.mapView()->mapPending() && !panel.mapView()->mapImage().isNull(), 60000);
+        // The panel's map is then the library's, drawn from those fields.
+        const brdf_atlas::Model fresh(model.toStdString());
+        const BrdfAtlasView win = panel.mapView()->mapWindow();
+        const QImage shown = panel.mapView()->mapImage();
+        const std::vector<float> want = fresh.albedo_map(std::size_t(shown.width()), std::size_t(shown.height()), win, 0);
+        QCOMPARE(shown.pixel(shown.width() / 2, shown.height() / 2),
+                 atlasPixel(&want[3 * (std::size_t(shown.height() / 2) * shown.width() + shown.width() / 2)],
+                            fresh.variance_map(std::size_t(shown.width()), std::size_t(shown.height()), win)
+                                [std::size_t(shown.height() / 2) * shown.width() + shown.width() / 2]));
+
+        // A second panel on the same model finds them: nothing built again.
+        const QDateTime written = QFileInfo(fields).lastModified();
+        AtlasPanel again;
+        again.show();
+        QSignalSpy reopened(&again, &AtlasPanel::modelOpened);
+        again.openModel(model);
+        QTRY_VERIFY_WITH_TIMEOUT(reopened.count() == 1, 60000);
+        QVERIFY(!again.busy());
+        QCOMPARE(QFileInfo(fields).lastModified(), written);
     }
 
     void storeRewrittenWhileOpenIsShownAndRecovered() {

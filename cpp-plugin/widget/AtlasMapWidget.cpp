@@ -114,6 +114,10 @@ void AtlasMapView::setModel(std::shared_ptr<const brdf_atlas::Model> model) {
     update();
 }
 
+void AtlasMapView::redraw() {
+    if (model_) scheduleMap();
+}
+
 void AtlasMapView::fitDefaultWindow() {
     const double w = std::max(1, width()), h = std::max(1, height());
     centre_ = QPointF((defaultWindow_.x0 + defaultWindow_.x1) / 2,

@@ -40,6 +40,7 @@
 #include <QWidget>
 
 #include <atomic>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -108,6 +109,9 @@ public:
 
     /// Show `model` (nullptr clears): its default window fitted to the widget.
     void setModel(std::shared_ptr<const brdf_atlas::Model> model);
+    /// Draw the window shown again (preview, then full map): after the
+    /// model gained what makes its maps faster.
+    void redraw();
     const std::shared_ptr<const brdf_atlas::Model> &model() const { return model_; }
 
     /// Names and latent points of the model's materials.
@@ -299,7 +303,8 @@ public:
 
     /// The model file shown ("" before one is open).
     QString modelPath() const { return modelPath_; }
-    /// Whether a model open, a reconstruction or an export is running.
+    /// Whether a model open, the map's fields being built, a reconstruction
+    /// or an export is running.
     bool busy() const;
     /// The last reconstruction (table null before the first).
     const AtlasReconstruction &lastReconstruction() const { return last_; }
@@ -362,6 +367,11 @@ private:
     void showPlausibility();
     void setBusy(bool busy, const QString &what);
     void fail(const QString &message);
+    /// Build the map's fields of the default view and of [-3, 3]^2 off the
+    /// GUI thread and save them beside the model (what `brdf-atlas fit`
+    /// does), for a model opened without them; the map is drawn again
+    /// once they are there.
+    void prepareFields(std::shared_ptr<const brdf_atlas::Model> model);
     QString nameFor(double x, double y) const;
 
     AtlasMapView *view_;
@@ -388,6 +398,8 @@ private:
         std::shared_ptr<const brdf_atlas::Model> model;
         QString path;
         QString error;
+        /// The model has its map's fields saved beside it (usable).
+        bool fieldsSaved = true;
     };
     struct Built {
         AtlasReconstruction r;
@@ -396,6 +408,9 @@ private:
     QFutureWatcher<Opened> *openWatcher_;
     QFutureWatcher<Built> *buildWatcher_;
     QFutureWatcher<AtlasExport> *exportWatcher_;
+    /// Building the map's fields: the error ("" on success or cancel).
+    QFutureWatcher<QString> *fieldsWatcher_;
+    std::shared_ptr<std::atomic<std::int32_t>> fieldsCancel_;
 };
 
 #endif  // BRDF_ATLAS_MAP_WIDGET_H

@@ -25,6 +25,10 @@ namespace {
 // As in AtlasMapWidget.cpp: the library's message, as the panel shows it.
 QString errorText(const std::exception &e) { return QString::fromUtf8(e.what()); }
 
+// The status line while the map's fields are built for a model without them.
+const QString kBuildingFields =
+    QStringLiteral("building the map's fields (once: saved beside the model)...");
+
 }  // namespace
 
 AtlasPanel::AtlasPanel(QWidget *parent)
@@ -46,7 +50,8 @@ AtlasPanel::AtlasPanel(QWidget *parent)
       details_(new QScrollArea),
       openWatcher_(new QFutureWatcher<Opened>(this)),
       buildWatcher_(new QFutureWatcher<Built>(this)),
-      exportWatcher_(new QFutureWatcher<AtlasExport>(this)) {
+      exportWatcher_(new QFutureWatcher<AtlasExport>(this)),
+      fieldsWatcher_(new QFutureWatcher<QString>(this)) {
     qRegisterMetaType<AtlasReconstruction>();
     qRegisterMetaType<AtlasExport>();
     setObjectName(QStringLiteral("brdfAtlasPanel"));
@@ -173,7 +178,20 @@ AtlasPanel::AtlasPanel(QWidget *parent)
         status_->setText(QStringLiteral("Click the map, then Validate."));
         updateCoordinates();
         showPlausibility();
+        if (!o.fieldsSaved) prepareFields(o.model);
         emit modelOpened(o.path);
+    });
+    connect(fieldsWatcher_, &QFutureWatcher<QString>::finished, this, [this] {
+        const QString error = fieldsWatcher_->result();
+        setBusy(false, QString());
+        if (!error.isEmpty()) {
+            fail(error);
+            return;
+        }
+        if (status_->text() == kBuildingFields) {
+            status_->setText(QStringLiteral("Click the map, then Validate."));
+        }
+        view_->redraw();
     });
     connect(buildWatcher_, &QFutureWatcher<Built>::finished, this, [this] {
         Built b = buildWatcher_->result();
@@ -215,6 +233,8 @@ AtlasPanel::AtlasPanel(QWidget *parent)
 }
 
 AtlasPanel::~AtlasPanel() {
+    if (fieldsCancel_) fieldsCancel_->store(1);
+    fieldsWatcher_->waitForFinished();
     openWatcher_->waitForFinished();
     buildWatcher_->waitForFinished();
     exportWatcher_->waitForFinished();
@@ -223,7 +243,29 @@ AtlasPanel::~AtlasPanel() {
 std::int32_t AtlasPanel::blendRule() const { return std::int32_t(blend_->currentData().toInt()); }
 
 bool AtlasPanel::busy() const {
-    return openWatcher_->isRunning() || buildWatcher_->isRunning() || exportWatcher_->isRunning();
+    return openWatcher_->isRunning() || fieldsWatcher_->isRunning() || buildWatcher_->isRunning() ||
+           exportWatcher_->isRunning();
+}
+
+void AtlasPanel::prepareFields(std::shared_ptr<const brdf_atlas::Model> model) {
+    if (fieldsWatcher_->isRunning()) return;
+    setBusy(true, kBuildingFields);
+    fieldsCancel_ = std::make_shared<std::atomic<std::int32_t>>(0);
+    fieldsWatcher_->setFuture(QtConcurrent::run([model, cancel = fieldsCancel_]() -> QString {
+        // A 1024 x 1024 map's fields, as `brdf-atlas fit` builds them: the
+        // panel's windows, twice as wide as high, lie inside [-3, 3]^2's.
+        const brdf_atlas::View wide{-3.0, 3.0, -3.0, 3.0};
+        try {
+            model->prepare_map_fields(1024, 1024, model->view(), cancel.get());
+            model->prepare_map_fields(1024, 1024, wide, cancel.get());
+        } catch (const brdf_atlas::Error &e) {
+            if (e.status() == BRDF_ATLAS_STATUS_CANCELLED) return QString();
+            return errorText(e);
+        } catch (const std::exception &e) {
+            return errorText(e);
+        }
+        return QString();
+    }));
 }
 
 void AtlasPanel::setBusy(bool busy, const QString &what) {
@@ -355,6 +397,7 @@ QString AtlasPanel::nameFor(double x, double y) const {
 
 void AtlasPanel::openModel(const QString &path) {
     if (openWatcher_->isRunning()) return;
+    if (fieldsCancel_) fieldsCancel_->store(1);  // the last model's
     setBusy(true, QStringLiteral("opening %1 (checking its store)...").arg(QFileInfo(path).fileName()));
     openWatcher_->setFuture(QtConcurrent::run([path]() -> Opened {
         Opened o;
@@ -366,6 +409,13 @@ void AtlasPanel::openModel(const QString &path) {
                               .arg(path)
                               .arg(m->latent_dim());
                 return o;
+            }
+            // Reads the map's fields saved beside the model, if any, here
+            // rather than at the first map.
+            try {
+                o.fieldsSaved = m->saved_fields() > 0;
+            } catch (const std::exception &) {
+                o.fieldsSaved = false;  // unusable: built and saved anew
             }
             o.model = std::move(m);
         } catch (const std::exception &e) {

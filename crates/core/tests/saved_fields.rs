@@ -160,7 +160,8 @@ fn a_saved_fields_file_that_cannot_be_used_is_named_and_left_aside() {
     first.save_fields().unwrap().unwrap();
     let file = fields_path(&path);
     let whole = std::fs::read(&file).unwrap();
-    let damages: Vec<(&str, Box<dyn Fn()>)> = vec![
+    type Damage<'a> = Box<dyn Fn() + 'a>;
+    let damages: Vec<(&str, Damage)> = vec![
         (
             "not a brdf-atlas fields file",
             Box::new(|| std::fs::write(&file, &whole[..whole.len() / 2]).unwrap()),

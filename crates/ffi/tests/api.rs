@@ -1,6 +1,7 @@
 //! The C functions called from Rust, for what the C and C++ consumers do
 //! not reach: models that are not 2-D, a raw-transform model's exact map,
-//! misaligned buffers, a map cancelled by its caller.
+//! misaligned buffers, a map cancelled by its caller, the map's fields
+//! built, saved beside the model and read by the next handle.
 
 use std::ffi::{CStr, CString};
 use std::path::{Path, PathBuf};
@@ -275,5 +276,70 @@ fn a_marker_reports_how_its_material_comes_back() {
     assert_eq!(s, BrdfAtlasStatus::InvalidArgument);
     let s =
         unsafe { brdf_atlas_model_marker(null(), 0.0, 0.0, null_mut(), null_mut(), null_mut()) };
+    assert_eq!(s, BrdfAtlasStatus::NullArgument);
+}
+
+#[test]
+fn map_fields_are_built_saved_and_read_by_the_next_handle() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = fit(tmp.path(), 2, TransformKind::Log);
+    let file = brdf_atlas_core::fields_path(&path);
+    let saved = |h: &Handle| {
+        let mut n = usize::MAX;
+        let s = unsafe { brdf_atlas_model_saved_fields(h.0, &mut n) };
+        (s, n)
+    };
+    let (w, ht) = (32, 24);
+    let map = |h: &Handle| {
+        let mut out = vec![0.0f32; w * ht * 3];
+        let s = unsafe {
+            brdf_atlas_model_albedo_map(h.0, w, ht, null(), 0, out.as_mut_ptr(), out.len())
+        };
+        assert_eq!(s, BrdfAtlasStatus::Ok, "{}", last_error());
+        out
+    };
+    // The map without fields (a map this small has too small a budget to
+    // build them).
+    let without = map(&Handle::open(&path));
+    let h = Handle::open(&path);
+    assert_eq!(
+        saved(&h),
+        (BrdfAtlasStatus::Ok, 0),
+        "a library fit saves none"
+    );
+    let wide = BrdfAtlasView {
+        x0: -3.0,
+        x1: 3.0,
+        y0: -3.0,
+        y1: 3.0,
+    };
+    // Cancelled: nothing built, nothing saved.
+    let flag = AtomicI32::new(1);
+    let s = unsafe { brdf_atlas_model_prepare_map_fields(h.0, 512, 512, &wide, flag.as_ptr()) };
+    assert_eq!(s, BrdfAtlasStatus::Cancelled, "{}", last_error());
+    assert!(!file.exists());
+    let s = unsafe { brdf_atlas_model_prepare_map_fields(h.0, 512, 512, null(), null()) };
+    assert_eq!(s, BrdfAtlasStatus::Ok, "{}", last_error());
+    assert!(file.exists());
+    // The map of the default window: from the field just built, the same
+    // bits as a new handle's, which reads it from the file.
+    let first = map(&h);
+    assert_ne!(first, without, "drawn from the field");
+    let again = Handle::open(&path);
+    let (s, n) = saved(&again);
+    assert_eq!(s, BrdfAtlasStatus::Ok, "{}", last_error());
+    assert!(n >= 1, "{n}");
+    assert_eq!(map(&again), first);
+    // A damaged file: BAD_FILE naming it, and maps as before.
+    std::fs::write(&file, b"{\"format\": 3").unwrap();
+    let damaged = Handle::open(&path);
+    let (s, _) = saved(&damaged);
+    assert_eq!(s, BrdfAtlasStatus::BadFile);
+    assert!(last_error().contains(".fields"), "{}", last_error());
+    assert_eq!(map(&damaged), without);
+    // NULL arguments.
+    let s = unsafe { brdf_atlas_model_saved_fields(h.0, null_mut()) };
+    assert_eq!(s, BrdfAtlasStatus::NullArgument);
+    let s = unsafe { brdf_atlas_model_prepare_map_fields(null(), 8, 8, null(), null()) };
     assert_eq!(s, BrdfAtlasStatus::NullArgument);
 }
