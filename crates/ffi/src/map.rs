@@ -40,7 +40,11 @@ fn map_samples(samples: usize) -> Result<Option<usize>> {
 /// the same region are fast) where it costs less than 256 samples a pixel;
 /// else the sampled field (the same polynomial through albedos integrated
 /// with 1024 samples at its nodes, a few per cent off at worst, also kept)
-/// where that costs less; else 256 samples a pixel. (The GP's map of a model in the raw transform
+/// where that costs less; else 256 samples a pixel. A field the model holds
+/// whose region holds the window is used first, the fields saved beside
+/// the model among them (`brdf_atlas_model_saved_fields`: `brdf-atlas fit`
+/// saves the default view's and [-3, 3]^2's), so such maps take a fraction
+/// of a second. (The GP's map of a model in the raw transform
 /// is exact instead: the per-material albedos blended.) At most `BRDF_ATLAS_MAX_SAMPLES`.
 ///
 /// Ownership: `model` and `view` are borrowed; `buf` is caller-owned, `len`
