@@ -115,9 +115,9 @@ fn atlas(c: &mut Criterion) {
                 .expect("map")
         })
     });
-    // The default log map (the soft floor's material) of 1024 x 1024 pixels: of the default view (a
-    // field there would cost more than the per-pixel rule, which it falls
-    // back to), and of a view a hundred times smaller, the albedo field,
+    // The default log map (the soft floor's material) of 1024 x 1024 pixels: of the default view (an
+    // exact field there would cost more than the per-pixel rule: the
+    // sampled field, kept after the first), and of a view a hundred times smaller, the albedo field,
     // first as built from scratch (`build_field`: its exact nodes, the cost
     // of the first map of a region) and then as a map that reuses the
     // model's field (every later map of the region).
@@ -149,6 +149,56 @@ fn atlas(c: &mut Criterion) {
             })
         });
     }
+    // The map's saved fields (`brdf-atlas fit` builds them): building the
+    // default view's and [-3, 3]^2's on a fresh atlas and saving them
+    // (what the fit adds), then the first map of a new process (a fresh
+    // atlas: the file read, the polynomial evaluated) of the default view,
+    // of [-3, 3]^2 and of the map panel's first window (322 x 160, twice
+    // as wide as high).
+    let fields = brdf_atlas_core::fields_path(log.path());
+    let fresh = || brdf_atlas_core::Atlas::new(Model::open(log.path()).expect("open model"));
+    let prepare = |atlas: &brdf_atlas_core::Atlas| {
+        for view in [View::default(), View::wide()] {
+            atlas
+                .prepare_fields((1024, 1024, view), BlendRule::Floor, &NoProgress)
+                .expect("fields");
+        }
+    };
+    g.bench_function("log_fields_prepare", |b| {
+        b.iter_batched(
+            || {
+                let _ = std::fs::remove_file(&fields);
+                fresh()
+            },
+            |atlas| prepare(&atlas),
+            criterion::BatchSize::PerIteration,
+        )
+    });
+    prepare(&fresh());
+    let d = View::default();
+    let panel = View {
+        x0: 2.0 * d.x0,
+        x1: 2.0 * d.x1,
+        ..d
+    };
+    for (name, view, (w, h)) in [
+        ("default", d, (1024, 1024)),
+        ("wide", View::wide(), (1024, 1024)),
+        ("panel", panel, (322, 160)),
+    ] {
+        g.bench_function(BenchmarkId::new("log_saved_fields_first_map", name), |b| {
+            b.iter_batched(
+                fresh,
+                |atlas| {
+                    atlas
+                        .map(brdf_atlas_core::MapRequest::new(w, h).view(view))
+                        .expect("map")
+                },
+                criterion::BatchSize::PerIteration,
+            )
+        });
+    }
+    std::fs::remove_file(&fields).expect("the fields saved");
     // The prepared map: a 1024 x 1024 map of the default view and of a
     // view a hundred times smaller, each pixel the cubic of the lattice.
     // The lattice is `BRDF_ATLAS_PREPARED_MODEL`'s (a model with its

@@ -7,8 +7,8 @@
 //! and node rule, the field built ([`AlbedoField`]: its patches' grids and
 //! node values, and the variance's) or the budget at which it was given up
 //! (so that a later map does not plan it again). `brdf-atlas fit` writes
-//! the default view's ([`Atlas::prepare_fields`]); `brdf-atlas map` adds
-//! those it builds ([`Atlas::save_fields`]). It is read on first use
+//! the default view's and [`View::wide`]'s ([`Atlas::prepare_fields`]);
+//! `brdf-atlas map` adds those it builds ([`Atlas::save_fields`]). It is read on first use
 //! ([`Atlas::saved_fields`]); a file from another fit, or one that is not
 //! whole, is left aside (the map builds what it needs, and the next save
 //! replaces it).
@@ -293,8 +293,8 @@ impl Atlas {
     /// draws from (the exact field where it fits its budget, else the
     /// sampled one, [`Atlas::map`]) and save it beside the model
     /// ([`Atlas::save_fields`]): what `brdf-atlas fit` does for the default
-    /// view, so that the first map after the fit, in any process, only
-    /// evaluates it. How such a map is then drawn (`None`: every pixel
+    /// view and for [`View::wide`], so that the first map after the fit, in
+    /// any process, only evaluates them. How such a map is then drawn (`None`: every pixel
     /// integrated, no field fits its budget), and the file written (`None`
     /// when it held the field already).
     pub fn prepare_fields(
