@@ -658,6 +658,41 @@ enum BrdfAtlasStatus brdf_atlas_model_prepare_map_fields(const struct BrdfAtlasM
                                                          const int32_t *cancel);
 
 /**
+ * The albedo map and the predictive variance of every pixel from one
+ * call: `rgb` as `brdf_atlas_model_albedo_map_with` writes it (the same
+ * bits), and, unless `variance` is NULL, one float a pixel as
+ * `brdf_atlas_model_variance_map` lays them out: where the map is drawn
+ * from a field, the field's polynomial of the variance (within 0.002 of
+ * the exact variance), else the exact variance. What a viewer that fades
+ * its map where the model knows little needs for a frame, without a
+ * second pass over the pixels (a map from a field costs tens of
+ * milliseconds, the exact variance as much again). `blend` and `cancel`
+ * as in `brdf_atlas_model_albedo_map_with`.
+ *
+ * Ownership: `model` and `view` are borrowed; `rgb` (`rgb_len` floats, at
+ * least width * height * 3) and `variance` (`variance_len` floats, at
+ * least width * height) are caller-owned, written on success only.
+ *
+ * Returns what `brdf_atlas_model_albedo_map_with` returns, and
+ * BUFFER_TOO_SMALL for either buffer.
+ *
+ * # Safety
+ * As `brdf_atlas_model_albedo_map_with`; `variance` is NULL or valid for
+ * writing `variance_len` floats.
+ */
+enum BrdfAtlasStatus brdf_atlas_model_map(const struct BrdfAtlasModel *model,
+                                          size_t width,
+                                          size_t height,
+                                          const struct BrdfAtlasView *view,
+                                          size_t samples,
+                                          int32_t blend,
+                                          const int32_t *cancel,
+                                          float *rgb,
+                                          size_t rgb_len,
+                                          float *variance,
+                                          size_t variance_len);
+
+/**
  * The GP's predictive variance (`1 - k(x)^T K^-1 k(x)`: 0 at an input
  * material, 1 where the data say nothing, above 0.5 the model knows
  * little) at every pixel of a `width` x `height` image of `view`, laid out

@@ -249,6 +249,34 @@ public:
         return rgb;
     }
 
+    /// A map's albedo (width * height * 3 floats, as albedo_map()) and
+    /// predictive variance (width * height floats, as variance_map(); the
+    /// field's polynomial where the map is drawn from a field) from one
+    /// call: what a viewer needs for a frame. `blend` as in
+    /// albedo_map_with(); `cancel` as in the cancellable albedo_map().
+    struct Map {
+        std::vector<float> rgb;
+        std::vector<float> variance;
+    };
+    Map map(std::size_t width, std::size_t height, const View &view, std::size_t samples = 0,
+            std::int32_t blend = BRDF_ATLAS_BLEND_FLOOR,
+            const std::atomic<std::int32_t> *cancel = nullptr) const {
+        static_assert(sizeof(std::atomic<std::int32_t>) == sizeof(std::int32_t) &&
+                          std::atomic<std::int32_t>::is_always_lock_free,
+                      "the library reads the flag as a lock-free 32-bit atomic");
+        const auto *flag = reinterpret_cast<const std::int32_t *>(cancel);
+        if (width == 0 || height == 0 || width > BRDF_ATLAS_MAX_MAP_SIDE ||
+            height > BRDF_ATLAS_MAX_MAP_SIDE) {
+            check(brdf_atlas_model_map(handle_, width, height, &view, samples, blend, flag,
+                                       nullptr, 0, nullptr, 0));
+        }
+        Map out{std::vector<float>(width * height * 3), std::vector<float>(width * height)};
+        check(brdf_atlas_model_map(handle_, width, height, &view, samples, blend, flag,
+                                   out.rgb.data(), out.rgb.size(), out.variance.data(),
+                                   out.variance.size()));
+        return out;
+    }
+
     /// How many entries (fields, and regions whose exact field is over
     /// budget) the fields saved beside the model hold: 0 when there are
     /// none. Throws Error (BRDF_ATLAS_STATUS_BAD_FILE) when the file cannot

@@ -143,13 +143,13 @@ inline void checkPlausibilityShown(const QString &model, AtlasPanel *panel,
 
 // Whether `image`, a map of `window` shown by the view, is the library's map
 // of that window pixel for pixel: its albedo map with `samples` quadrature
-// samples (0: the full map's), faded by its variance map.
+// samples (0: the full map's), faded by the map's variance.
 inline bool sameAsLibraryMap(const brdf_atlas::Model &m, const QImage &image, const BrdfAtlasView &window,
                              std::size_t samples) {
     const brdf_atlas::View v{window.x0, window.x1, window.y0, window.y1};
     const int w = image.width(), h = image.height();
-    const std::vector<float> rgb = m.albedo_map(w, h, v, samples);
-    const std::vector<float> variance = m.variance_map(w, h, v);
+    const brdf_atlas::Model::Map map = m.map(w, h, v, samples);
+    const std::vector<float> &rgb = map.rgb, &variance = map.variance;
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             const std::size_t p = std::size_t(y) * w + x;

@@ -262,11 +262,15 @@ AtlasMapView::MapResult AtlasMapView::computeMap(std::shared_ptr<const brdf_atla
     const int width = req.width, height = req.height;
     const BrdfAtlasView win = req.window;
     try {
-        const std::vector<float> rgb =
+        // The albedo and the variance (which fades the map where the model
+        // knows little) from one call: the full map's variance then comes
+        // from the field its albedo does, not a product a pixel.
+        const brdf_atlas::Model::Map map =
             req.level == kPreview
-                ? model->albedo_map(width, height, win, kPreviewSamples)
-                : model->albedo_map(width, height, win, 0, *cancel);
-        const std::vector<float> variance = model->variance_map(width, height, win);
+                ? model->map(width, height, win, kPreviewSamples)
+                : model->map(width, height, win, 0, BRDF_ATLAS_BLEND_FLOOR, cancel.get());
+        const std::vector<float> &rgb = map.rgb;
+        const std::vector<float> &variance = map.variance;
         QImage image(width, height, QImage::Format_RGB32);
         for (int y = 0; y < height; ++y) {
             QRgb *line = reinterpret_cast<QRgb *>(image.scanLine(y));

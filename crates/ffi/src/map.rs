@@ -143,13 +143,7 @@ pub unsafe extern "C" fn brdf_atlas_model_albedo_map_with(
     len: usize,
 ) -> BrdfAtlasStatus {
     run("brdf_atlas_model_albedo_map_with", || {
-        let rule = rule(blend)?;
-        if rule == BlendRule::Plausible {
-            return Err(Failure::invalid(
-                "BRDF_ATLAS_BLEND_PLAUSIBLE has no map: its steps need a pass over the store \
-                 per point; map BRDF_ATLAS_BLEND_FLOOR or BRDF_ATLAS_BLEND_GP",
-            ));
-        }
+        let rule = map_rule(blend)?;
         let progress: Box<dyn Progress> = if cancel.is_null() {
             Box::new(NoProgress)
         } else {
@@ -241,6 +235,87 @@ pub unsafe extern "C" fn brdf_atlas_model_prepare_map_fields(
         m.prepare_fields((width, height, view), BlendRule::default(), &*progress)?;
         Ok(())
     })
+}
+
+/// The albedo map and the predictive variance of every pixel from one
+/// call: `rgb` as `brdf_atlas_model_albedo_map_with` writes it (the same
+/// bits), and, unless `variance` is NULL, one float a pixel as
+/// `brdf_atlas_model_variance_map` lays them out: where the map is drawn
+/// from a field, the field's polynomial of the variance (within 0.002 of
+/// the exact variance), else the exact variance. What a viewer that fades
+/// its map where the model knows little needs for a frame, without a
+/// second pass over the pixels (a map from a field costs tens of
+/// milliseconds, the exact variance as much again). `blend` and `cancel`
+/// as in `brdf_atlas_model_albedo_map_with`.
+///
+/// Ownership: `model` and `view` are borrowed; `rgb` (`rgb_len` floats, at
+/// least width * height * 3) and `variance` (`variance_len` floats, at
+/// least width * height) are caller-owned, written on success only.
+///
+/// Returns what `brdf_atlas_model_albedo_map_with` returns, and
+/// BUFFER_TOO_SMALL for either buffer.
+///
+/// # Safety
+/// As `brdf_atlas_model_albedo_map_with`; `variance` is NULL or valid for
+/// writing `variance_len` floats.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn brdf_atlas_model_map(
+    model: *const BrdfAtlasModel,
+    width: usize,
+    height: usize,
+    view: *const BrdfAtlasView,
+    samples: usize,
+    blend: i32,
+    cancel: *const i32,
+    rgb: *mut f32,
+    rgb_len: usize,
+    variance: *mut f32,
+    variance_len: usize,
+) -> BrdfAtlasStatus {
+    run("brdf_atlas_model_map", || {
+        let rule = map_rule(blend)?;
+        let progress: Box<dyn Progress> = if cancel.is_null() {
+            Box::new(NoProgress)
+        } else {
+            Box::new(unsafe { cancel_flag(cancel) }?)
+        };
+        let m = unsafe { handle::borrow(model) }?;
+        check::planar(m)?;
+        let view = unsafe { map_window(view, width, height) }?;
+        let values = check::product(&[width, height, 3], "map size")?;
+        let out = unsafe { check::buffer(rgb, rgb_len, values, "rgb") }?;
+        let var_out = if variance.is_null() {
+            None
+        } else {
+            Some(unsafe { check::buffer(variance, variance_len, width * height, "variance") }?)
+        };
+        let map = m.map(
+            brdf_atlas_core::MapRequest::new(width, height)
+                .view(view)
+                .samples(map_samples(samples)?)
+                .rule(rule)
+                .progress(&*progress),
+        )?;
+        for (o, c) in out.chunks_exact_mut(3).zip(&map.rgb) {
+            o.copy_from_slice(c);
+        }
+        if let Some(v) = var_out {
+            v.copy_from_slice(&map.variance);
+        }
+        Ok(())
+    })
+}
+
+/// A map's blend rule: the floor's or the GP's (the plausible rule has no map).
+fn map_rule(blend: i32) -> Result<BlendRule, Failure> {
+    let rule = rule(blend)?;
+    if rule == BlendRule::Plausible {
+        return Err(Failure::invalid(
+            "BRDF_ATLAS_BLEND_PLAUSIBLE has no map: its steps need a pass over the store \
+             per point; map BRDF_ATLAS_BLEND_FLOOR or BRDF_ATLAS_BLEND_GP",
+        ));
+    }
+    Ok(rule)
 }
 
 /// A caller's non-NULL cancel flag, checked for alignment.

@@ -343,3 +343,102 @@ fn map_fields_are_built_saved_and_read_by_the_next_handle() {
     let s = unsafe { brdf_atlas_model_prepare_map_fields(null(), 8, 8, null(), null()) };
     assert_eq!(s, BrdfAtlasStatus::NullArgument);
 }
+
+#[test]
+fn one_call_gives_the_map_and_its_variance() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = fit(tmp.path(), 2, TransformKind::Log);
+    let h = Handle::open(&path);
+    let view = BrdfAtlasView {
+        x0: -1.5,
+        x1: 0.5,
+        y0: -0.8,
+        y1: 1.2,
+    };
+    for (samples, (w, ht)) in [(0, (160, 120)), (16, (24, 18))] {
+        let mut want = vec![0.0f32; w * ht * 3];
+        let s = unsafe {
+            brdf_atlas_model_albedo_map_with(
+                h.0,
+                w,
+                ht,
+                &view,
+                samples,
+                BRDF_ATLAS_BLEND_FLOOR,
+                null(),
+                want.as_mut_ptr(),
+                want.len(),
+            )
+        };
+        assert_eq!(s, BrdfAtlasStatus::Ok, "{}", last_error());
+        let mut exact = vec![0.0f32; w * ht];
+        let s = unsafe {
+            brdf_atlas_model_variance_map(h.0, w, ht, &view, exact.as_mut_ptr(), exact.len())
+        };
+        assert_eq!(s, BrdfAtlasStatus::Ok, "{}", last_error());
+        let (mut rgb, mut var) = (vec![0.0f32; w * ht * 3], vec![-1.0f32; w * ht]);
+        let s = unsafe {
+            brdf_atlas_model_map(
+                h.0,
+                w,
+                ht,
+                &view,
+                samples,
+                BRDF_ATLAS_BLEND_FLOOR,
+                null(),
+                rgb.as_mut_ptr(),
+                rgb.len(),
+                var.as_mut_ptr(),
+                var.len(),
+            )
+        };
+        assert_eq!(s, BrdfAtlasStatus::Ok, "{}", last_error());
+        // The albedo map's bits; the variance within the field's tolerance
+        // of the exact one (the exact one itself per pixel).
+        assert_eq!(rgb, want);
+        for (v, e) in var.iter().zip(&exact) {
+            assert!((v - e).abs() <= 2e-3, "{v} {e} ({samples} samples)");
+        }
+        if samples > 0 {
+            assert_eq!(var, exact);
+        }
+        // No variance asked for: the same albedo.
+        let mut alone = vec![0.0f32; w * ht * 3];
+        let s = unsafe {
+            brdf_atlas_model_map(
+                h.0,
+                w,
+                ht,
+                &view,
+                samples,
+                BRDF_ATLAS_BLEND_FLOOR,
+                null(),
+                alone.as_mut_ptr(),
+                alone.len(),
+                null_mut(),
+                0,
+            )
+        };
+        assert_eq!(s, BrdfAtlasStatus::Ok, "{}", last_error());
+        assert_eq!(alone, want);
+        // A variance buffer one short: refused, nothing written.
+        let mut short = vec![-1.0f32; w * ht - 1];
+        let s = unsafe {
+            brdf_atlas_model_map(
+                h.0,
+                w,
+                ht,
+                &view,
+                samples,
+                BRDF_ATLAS_BLEND_FLOOR,
+                null(),
+                rgb.as_mut_ptr(),
+                rgb.len(),
+                short.as_mut_ptr(),
+                short.len(),
+            )
+        };
+        assert_eq!(s, BrdfAtlasStatus::BufferTooSmall);
+        assert!(short.iter().all(|v| *v == -1.0));
+    }
+}
