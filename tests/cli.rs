@@ -215,6 +215,7 @@ fn demo_synthesises_summarises_fits_maps_reconstructs_and_reports() {
     for made in [
         "model.atlas",
         "model.atlas.store",
+        "model.fields",
         "map.png",
         "map.json",
         "map.exr",

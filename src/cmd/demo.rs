@@ -102,6 +102,14 @@ pub fn run(args: &Args) -> Result<ExitCode, Error> {
             size(model.store().len_bytes())
         )?;
     }
+    if let Some(model) = &state.model
+        && brdf_atlas_core::fields_path(model.path()).exists()
+    {
+        writeln!(
+            out,
+            "  {FIELDS:<22}the map's fields the fit saved: maps inside them take a fraction of a second"
+        )?;
+    }
     writeln!(
         out,
         "  {MAP_PNG:<22}its albedo map ({MAP_JSON} sidecar, {MAP_EXR} linear float)"
@@ -122,6 +130,8 @@ pub fn run(args: &Args) -> Result<ExitCode, Error> {
 
 /// File names inside the demo directory.
 const MODEL: &str = "model.atlas";
+/// The model's saved map fields (`MODEL.fields`, written by the fit).
+const FIELDS: &str = "model.fields";
 const MAP_PNG: &str = "map.png";
 const MAP_JSON: &str = "map.json";
 const MAP_EXR: &str = "map.exr";
