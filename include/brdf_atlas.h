@@ -659,7 +659,7 @@ enum BrdfAtlasStatus brdf_atlas_model_prepare_map_fields(const struct BrdfAtlasM
 
 /**
  * The albedo map and the predictive variance of every pixel from one
- * call: `rgb` as `brdf_atlas_model_albedo_map_with` writes it (the same
+ * call: `buf` as `brdf_atlas_model_albedo_map_with` writes it (the same
  * bits), and, unless `variance` is NULL, one float a pixel as
  * `brdf_atlas_model_variance_map` lays them out: where the map is drawn
  * from a field, the field's polynomial of the variance (within 0.002 of
@@ -669,7 +669,7 @@ enum BrdfAtlasStatus brdf_atlas_model_prepare_map_fields(const struct BrdfAtlasM
  * milliseconds, the exact variance as much again). `blend` and `cancel`
  * as in `brdf_atlas_model_albedo_map_with`.
  *
- * Ownership: `model` and `view` are borrowed; `rgb` (`rgb_len` floats, at
+ * Ownership: `model` and `view` are borrowed; `buf` (`len` floats, at
  * least width * height * 3) and `variance` (`variance_len` floats, at
  * least width * height) are caller-owned, written on success only.
  *
@@ -687,8 +687,8 @@ enum BrdfAtlasStatus brdf_atlas_model_map(const struct BrdfAtlasModel *model,
                                           size_t samples,
                                           int32_t blend,
                                           const int32_t *cancel,
-                                          float *rgb,
-                                          size_t rgb_len,
+                                          float *buf,
+                                          size_t len,
                                           float *variance,
                                           size_t variance_len);
 

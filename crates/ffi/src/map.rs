@@ -144,11 +144,7 @@ pub unsafe extern "C" fn brdf_atlas_model_albedo_map_with(
 ) -> BrdfAtlasStatus {
     run("brdf_atlas_model_albedo_map_with", || {
         let rule = map_rule(blend)?;
-        let progress: Box<dyn Progress> = if cancel.is_null() {
-            Box::new(NoProgress)
-        } else {
-            Box::new(unsafe { cancel_flag(cancel) }?)
-        };
+        let progress = unsafe { optional_cancel(cancel) }?;
         unsafe {
             albedo_map(
                 model, width, height, view, samples, rule, &*progress, buf, len,
@@ -227,18 +223,14 @@ pub unsafe extern "C" fn brdf_atlas_model_prepare_map_fields(
         let m = unsafe { handle::borrow(model) }?;
         check::planar(m)?;
         let view = unsafe { map_window(view, width, height) }?;
-        let progress: Box<dyn Progress> = if cancel.is_null() {
-            Box::new(NoProgress)
-        } else {
-            Box::new(unsafe { cancel_flag(cancel) }?)
-        };
+        let progress = unsafe { optional_cancel(cancel) }?;
         m.prepare_fields((width, height, view), BlendRule::default(), &*progress)?;
         Ok(())
     })
 }
 
 /// The albedo map and the predictive variance of every pixel from one
-/// call: `rgb` as `brdf_atlas_model_albedo_map_with` writes it (the same
+/// call: `buf` as `brdf_atlas_model_albedo_map_with` writes it (the same
 /// bits), and, unless `variance` is NULL, one float a pixel as
 /// `brdf_atlas_model_variance_map` lays them out: where the map is drawn
 /// from a field, the field's polynomial of the variance (within 0.002 of
@@ -248,7 +240,7 @@ pub unsafe extern "C" fn brdf_atlas_model_prepare_map_fields(
 /// milliseconds, the exact variance as much again). `blend` and `cancel`
 /// as in `brdf_atlas_model_albedo_map_with`.
 ///
-/// Ownership: `model` and `view` are borrowed; `rgb` (`rgb_len` floats, at
+/// Ownership: `model` and `view` are borrowed; `buf` (`len` floats, at
 /// least width * height * 3) and `variance` (`variance_len` floats, at
 /// least width * height) are caller-owned, written on success only.
 ///
@@ -267,42 +259,24 @@ pub unsafe extern "C" fn brdf_atlas_model_map(
     samples: usize,
     blend: i32,
     cancel: *const i32,
-    rgb: *mut f32,
-    rgb_len: usize,
+    buf: *mut f32,
+    len: usize,
     variance: *mut f32,
     variance_len: usize,
 ) -> BrdfAtlasStatus {
     run("brdf_atlas_model_map", || {
         let rule = map_rule(blend)?;
-        let progress: Box<dyn Progress> = if cancel.is_null() {
-            Box::new(NoProgress)
-        } else {
-            Box::new(unsafe { cancel_flag(cancel) }?)
-        };
-        let m = unsafe { handle::borrow(model) }?;
-        check::planar(m)?;
-        let view = unsafe { map_window(view, width, height) }?;
-        let values = check::product(&[width, height, 3], "map size")?;
-        let out = unsafe { check::buffer(rgb, rgb_len, values, "rgb") }?;
-        let var_out = if variance.is_null() {
-            None
-        } else {
-            Some(unsafe { check::buffer(variance, variance_len, width * height, "variance") }?)
-        };
-        let map = m.map(
-            brdf_atlas_core::MapRequest::new(width, height)
-                .view(view)
-                .samples(map_samples(samples)?)
-                .rule(rule)
-                .progress(&*progress),
-        )?;
-        for (o, c) in out.chunks_exact_mut(3).zip(&map.rgb) {
-            o.copy_from_slice(c);
+        let progress = unsafe { optional_cancel(cancel) }?;
+        let variance = Some((variance, variance_len)).filter(|(p, _)| !p.is_null());
+        unsafe {
+            map_into(
+                model,
+                (width, height, view, samples, rule),
+                &*progress,
+                (buf, len),
+                variance,
+            )
         }
-        if let Some(v) = var_out {
-            v.copy_from_slice(&map.variance);
-        }
-        Ok(())
     })
 }
 
@@ -340,6 +314,18 @@ unsafe fn cancel_flag<'a>(cancel: *const i32) -> Result<CancelFlag<'a>, Failure>
     }))
 }
 
+/// A caller's cancel flag, or none if `cancel` is NULL, as a [`Progress`].
+///
+/// # Safety
+/// As [`cancel_flag`].
+unsafe fn optional_cancel<'a>(cancel: *const i32) -> Result<Box<dyn Progress + 'a>, Failure> {
+    Ok(if cancel.is_null() {
+        Box::new(NoProgress)
+    } else {
+        Box::new(unsafe { cancel_flag(cancel) }?)
+    })
+}
+
 /// A caller's cancel flag as the core's [`Progress`].
 struct CancelFlag<'a>(&'a AtomicI32);
 
@@ -349,7 +335,7 @@ impl Progress for CancelFlag<'_> {
     }
 }
 
-/// The body of both albedo map entry points.
+/// The body of the albedo map entry points: no variance wanted.
 ///
 /// # Safety
 /// As `brdf_atlas_model_albedo_map`.
@@ -365,11 +351,34 @@ unsafe fn albedo_map(
     buf: *mut f32,
     len: usize,
 ) -> Result<(), Failure> {
+    let request = (width, height, view, samples, rule);
+    unsafe { map_into(model, request, progress, (buf, len), None) }
+}
+
+/// A map's size, window, samples and blend rule, as the C calls give them.
+type MapArgs = (usize, usize, *const BrdfAtlasView, usize, BlendRule);
+
+/// The map of `request` into the caller's `buf`, and its variance
+/// into `variance` when given; both written on success only.
+///
+/// # Safety
+/// As `brdf_atlas_model_map` (`variance`'s pointer non-NULL).
+unsafe fn map_into(
+    model: *const BrdfAtlasModel,
+    (width, height, view, samples, rule): MapArgs,
+    progress: &dyn Progress,
+    (buf, len): (*mut f32, usize),
+    variance: Option<(*mut f32, usize)>,
+) -> Result<(), Failure> {
     let m = unsafe { handle::borrow(model) }?;
     check::planar(m)?;
     let view = unsafe { map_window(view, width, height) }?;
     let values = check::product(&[width, height, 3], "map size")?;
     let out = unsafe { check::buffer(buf, len, values, "buf") }?;
+    let var_out = match variance {
+        Some((p, n)) => Some(unsafe { check::buffer(p, n, width * height, "variance") }?),
+        None => None,
+    };
     let samples = map_samples(samples)?;
     let map = m.map(
         brdf_atlas_core::MapRequest::new(width, height)
@@ -380,6 +389,9 @@ unsafe fn albedo_map(
     )?;
     for (o, c) in out.chunks_exact_mut(3).zip(&map.rgb) {
         o.copy_from_slice(c);
+    }
+    if let Some(v) = var_out {
+        v.copy_from_slice(&map.variance);
     }
     Ok(())
 }

@@ -376,22 +376,27 @@ fn one_call_gives_the_map_and_its_variance() {
             brdf_atlas_model_variance_map(h.0, w, ht, &view, exact.as_mut_ptr(), exact.len())
         };
         assert_eq!(s, BrdfAtlasStatus::Ok, "{}", last_error());
-        let (mut rgb, mut var) = (vec![0.0f32; w * ht * 3], vec![-1.0f32; w * ht]);
-        let s = unsafe {
-            brdf_atlas_model_map(
-                h.0,
-                w,
-                ht,
-                &view,
-                samples,
-                BRDF_ATLAS_BLEND_FLOOR,
-                null(),
-                rgb.as_mut_ptr(),
-                rgb.len(),
-                var.as_mut_ptr(),
-                var.len(),
-            )
+        // The map into `rgb`, its variance into `var` unless None.
+        let map = |rgb: &mut [f32], var: Option<&mut [f32]>| {
+            let (vp, vn) = var.map_or((null_mut(), 0), |v| (v.as_mut_ptr(), v.len()));
+            unsafe {
+                brdf_atlas_model_map(
+                    h.0,
+                    w,
+                    ht,
+                    &view,
+                    samples,
+                    BRDF_ATLAS_BLEND_FLOOR,
+                    null(),
+                    rgb.as_mut_ptr(),
+                    rgb.len(),
+                    vp,
+                    vn,
+                )
+            }
         };
+        let (mut rgb, mut var) = (vec![0.0f32; w * ht * 3], vec![-1.0f32; w * ht]);
+        let s = map(&mut rgb, Some(&mut var));
         assert_eq!(s, BrdfAtlasStatus::Ok, "{}", last_error());
         // The albedo map's bits; the variance within the field's tolerance
         // of the exact one (the exact one itself per pixel).
@@ -404,41 +409,19 @@ fn one_call_gives_the_map_and_its_variance() {
         }
         // No variance asked for: the same albedo.
         let mut alone = vec![0.0f32; w * ht * 3];
-        let s = unsafe {
-            brdf_atlas_model_map(
-                h.0,
-                w,
-                ht,
-                &view,
-                samples,
-                BRDF_ATLAS_BLEND_FLOOR,
-                null(),
-                alone.as_mut_ptr(),
-                alone.len(),
-                null_mut(),
-                0,
-            )
-        };
-        assert_eq!(s, BrdfAtlasStatus::Ok, "{}", last_error());
+        assert_eq!(
+            map(&mut alone, None),
+            BrdfAtlasStatus::Ok,
+            "{}",
+            last_error()
+        );
         assert_eq!(alone, want);
         // A variance buffer one short: refused, nothing written.
         let mut short = vec![-1.0f32; w * ht - 1];
-        let s = unsafe {
-            brdf_atlas_model_map(
-                h.0,
-                w,
-                ht,
-                &view,
-                samples,
-                BRDF_ATLAS_BLEND_FLOOR,
-                null(),
-                rgb.as_mut_ptr(),
-                rgb.len(),
-                short.as_mut_ptr(),
-                short.len(),
-            )
-        };
-        assert_eq!(s, BrdfAtlasStatus::BufferTooSmall);
+        assert_eq!(
+            map(&mut rgb, Some(&mut short)),
+            BrdfAtlasStatus::BufferTooSmall
+        );
         assert!(short.iter().all(|v| *v == -1.0));
     }
 }
