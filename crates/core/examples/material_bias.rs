@@ -12,7 +12,9 @@ use brdf_merl::synth::SplitMix64;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
-    let path = args.next().ok_or("usage: material_bias MODEL [POINTS] [SAMPLES]")?;
+    let path = args
+        .next()
+        .ok_or("usage: material_bias MODEL [POINTS] [SAMPLES]")?;
     let count: usize = args.next().map_or(Ok(64), |s| s.parse())?;
     let samples: usize = args.next().map_or(Ok(1024), |s| s.parse())?;
     let atlas = Atlas::new(Model::open(&path)?);
