@@ -78,6 +78,7 @@ def fit(
     length_scale: float | None = None,
     noise: float = 3e-5,
     min_step: float = 1e-3,
+    map_field: bool = True,
     progress: Optional[Callable[[str, int, int], object]] = None,
 ) -> dict: ...
 def read_merl(path: _Path, raw: bool = False) -> _F64: ...

@@ -7,9 +7,8 @@ use std::time::{Duration, Instant};
 
 use brdf_atlas_core::limits::MAX_Q;
 use brdf_atlas_core::{
-    default_kernel,
-    Dataset, FitOptions, GplvmParams, OptimizerKind, Precision, Progress, TransformKind, fit_dir,
-    store_path_for,
+    Atlas, BlendRule, Dataset, FitOptions, GplvmParams, Model, OptimizerKind, Precision, Progress,
+    TransformKind, View, default_kernel, fit_dir, store_path_for,
 };
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -120,14 +119,19 @@ fn choice<T>(value: &str, option: &str, parse: fn(&str) -> Option<T>, names: &st
 /// the same `transform` and `store_precision` uses the existing store again
 /// (no store pass): `store_reused` says so.
 ///
+/// With `map_field` (the default, as the command-line tool) a 2-D model's
+/// map fields of the default view and of [-3, 3]^2 are built after the fit
+/// and saved beside the model (`fields`: its `.fields` file), so that the
+/// first maps of those regions, in any program, only evaluate them.
+///
 /// Returns a dict: `model`, `store` (paths), `store_reused`, `names`,
 /// `ignored` (entries left out, with why), `cost`, `initial_cost`,
-/// `iterations`, `evaluations`, and `seconds` (per phase: scan, store,
-/// optimise, save).
+/// `iterations`, `evaluations`, `fields` (the saved fields' path, or None),
+/// and `seconds` (per phase: scan, store, optimise, save, map_field).
 #[pyfunction]
 #[pyo3(signature = (merl_dir, out, *, q = 2, transform = "rel-log", optimizer = "lbfgs",
                     store_precision = "f32", length_scale = None, noise = 3e-5, min_step = 1e-3,
-                    progress = None))]
+                    map_field = true, progress = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit<'py>(
     py: Python<'py>,
@@ -140,6 +144,7 @@ pub fn fit<'py>(
     length_scale: Option<f64>,
     noise: f64,
     min_step: f64,
+    map_field: bool,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let transform = choice(
@@ -202,14 +207,22 @@ pub fn fit<'py>(
             Some(c) => c,
             None => &brdf_atlas_core::NoProgress,
         };
-        fit_dir(&merl_dir, &out, &options, progress).map_err(|e| {
+        let report = fit_dir(&merl_dir, &out, &options, progress).map_err(|e| {
             if !store_existed && !out.exists() {
                 // Best effort, as the command-line tool: the error is what matters.
                 let _ = std::fs::remove_file(&store_path);
             }
             Failure::from(e)
-        })
+        })?;
+        let t = Instant::now();
+        let fields = if map_field && q == 2 {
+            save_map_fields(&out, progress)?
+        } else {
+            None
+        };
+        Ok((report, fields, t.elapsed()))
     })?;
+    let (report, fields, field_time) = report;
     if let Some(e) = callback.and_then(|c| c.error.into_inner().unwrap_or_else(|e| e.into_inner()))
     {
         return Err(e);
@@ -231,6 +244,20 @@ pub fn fit<'py>(
     seconds.set_item("store", report.store_time.as_secs_f64())?;
     seconds.set_item("optimise", report.optimise_time.as_secs_f64())?;
     seconds.set_item("save", report.save_time.as_secs_f64())?;
+    seconds.set_item("map_field", field_time.as_secs_f64())?;
     d.set_item("seconds", seconds)?;
+    d.set_item("fields", fields)?;
     Ok(d)
+}
+
+/// Build the map fields of the default view and of [-3, 3]^2 (a 1024 x
+/// 1024 map's, of the default material) and save them beside the model, as
+/// `brdf-atlas fit` does; the fields file, if one was written or was there.
+fn save_map_fields(model: &Path, progress: &dyn Progress) -> Result<Option<PathBuf>> {
+    let atlas = Atlas::new(Model::open(model)?);
+    for view in [View::default(), View::wide()] {
+        atlas.prepare_fields((1024, 1024, view), BlendRule::default(), progress)?;
+    }
+    let path = brdf_atlas_core::fields_path(model);
+    Ok(path.exists().then_some(path))
 }

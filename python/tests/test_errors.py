@@ -1,12 +1,14 @@
 """Bad input raises brdf_atlas.errors classes with the command-line tool's
 one-line message, and nothing is left half done."""
 
+import pathlib
 import subprocess
 
 import numpy as np
 import pytest
 
 import brdf_atlas as ba
+from conftest import NOISE
 
 
 def cli_error(cli, *args):
@@ -129,3 +131,19 @@ def test_a_failing_progress_callback_is_raised_after_the_fit(data, tmp_path):
     labels = [s[0] for s in seen]
     assert labels[0] != "optimise" and "optimise" in labels
     assert all(0 <= d <= t for _, d, t in seen if t)
+
+
+def test_fit_saves_the_map_fields_unless_asked_not_to(data, tmp_path):
+    # As `brdf-atlas fit`: the map fields of the default view and of
+    # [-3, 3]^2 saved beside the model (its name with .fields).
+    out = tmp_path / "m.atlas"
+    r = ba.fit(data, out, noise=NOISE)
+    fields = tmp_path / "m.fields"
+    assert pathlib.Path(r["fields"]) == fields
+    assert fields.stat().st_size > 0
+    assert r["seconds"]["map_field"] > 0
+    bare = tmp_path / "bare" / "m.atlas"
+    bare.parent.mkdir()
+    r = ba.fit(data, bare, noise=NOISE, map_field=False)
+    assert r["fields"] is None
+    assert not (bare.parent / "m.fields").exists()
