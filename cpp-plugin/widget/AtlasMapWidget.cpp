@@ -24,7 +24,7 @@ constexpr double kNotchZoom = 0.25;
 // The full map starts once the window has stood still this long (ms): a
 // map drawn from the model's field takes tens of milliseconds, and one
 // whose window is left is cancelled, so waiting longer only adds latency.
-constexpr int kSettleMs = 50;
+constexpr int kSettleMs = 30;
 
 float srgb(float v) {
     v = std::min(std::max(v, 0.0f), 1.0f);
