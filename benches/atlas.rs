@@ -158,11 +158,7 @@ fn atlas(c: &mut Criterion) {
     let fields = brdf_atlas_core::fields_path(log.path());
     let fresh = || brdf_atlas_core::Atlas::new(Model::open(log.path()).expect("open model"));
     let prepare = |atlas: &brdf_atlas_core::Atlas| {
-        for view in [View::default(), View::wide()] {
-            atlas
-                .prepare_fields((1024, 1024, view), BlendRule::Floor, &NoProgress)
-                .expect("fields");
-        }
+        atlas.prepare_fit_fields(&NoProgress).expect("fields");
     };
     g.bench_function("log_fields_prepare", |b| {
         b.iter_batched(

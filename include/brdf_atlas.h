@@ -635,11 +635,9 @@ enum BrdfAtlasStatus brdf_atlas_model_saved_fields(const struct BrdfAtlasModel *
  * default material, and save every field the model holds beside the model
  * (`MODEL.fields`, atomically), so that later maps, in this program and
  * in any other, start from them. What `brdf-atlas fit` does for the
- * default view and for [-3, 3]^2: a viewer that opens a model without
- * them (`brdf_atlas_model_saved_fields` gives 0 or BAD_FILE) can build
- * them off its GUI thread, about 3 s for 100 materials on two cores, with
- * a 1024 x 1024 map's budget. `cancel` is NULL (not cancellable) or a flag
- * as in `brdf_atlas_model_albedo_map_cancellable`.
+ * default view and for [-3, 3]^2 (`brdf_atlas_model_prepare_fit_fields`
+ * builds that pair). `cancel` is NULL (not cancellable) or a flag as in
+ * `brdf_atlas_model_albedo_map_cancellable`.
  *
  * Returns OK (also when no field fits the map's budget: such maps
  * integrate every pixel, and nothing new is saved), NULL_ARGUMENT,
@@ -691,6 +689,28 @@ enum BrdfAtlasStatus brdf_atlas_model_map(const struct BrdfAtlasModel *model,
                                           size_t len,
                                           float *variance,
                                           size_t variance_len);
+
+/**
+ * What `brdf-atlas fit` does after the fit: build the fields 1024 x 1024
+ * maps of the default window and of [-3, 3]^2 draw from (whose region
+ * holds a viewer's windows twice as wide as high) and save them beside
+ * the model (`MODEL.fields`, atomically), as
+ * `brdf_atlas_model_prepare_map_fields` does for one window. A viewer
+ * that opens a model without them (`brdf_atlas_model_saved_fields` gives
+ * 0 or BAD_FILE) builds them off its GUI thread once: about 3 s for 100
+ * materials on two cores. `cancel` is NULL (not cancellable) or a flag as
+ * in `brdf_atlas_model_albedo_map_cancellable`.
+ *
+ * Returns OK, NULL_ARGUMENT, UNSUPPORTED (the model is not 2-D),
+ * CANCELLED (nothing saved), IO (the file could not be written: the model
+ * keeps the fields for this program's maps).
+ *
+ * # Safety
+ * `model` is NULL or a live handle; `cancel` as in
+ * `brdf_atlas_model_albedo_map_with`.
+ */
+enum BrdfAtlasStatus brdf_atlas_model_prepare_fit_fields(const struct BrdfAtlasModel *model,
+                                                         const int32_t *cancel);
 
 /**
  * The GP's predictive variance (`1 - k(x)^T K^-1 k(x)`: 0 at an input

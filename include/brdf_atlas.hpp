@@ -204,12 +204,12 @@ public:
     /// of the material reconstruct() gives. `samples` 0 is the library default.
     std::vector<float> albedo_map(std::size_t width, std::size_t height, const View &view,
                                   std::size_t samples = 0) const {
-        return map(width, height, &view, samples);
+        return plain_map(width, height, &view, samples);
     }
 
     /// The albedo map of the default window.
     std::vector<float> albedo_map(std::size_t width, std::size_t height) const {
-        return map(width, height, nullptr, 0);
+        return plain_map(width, height, nullptr, 0);
     }
 
     /// The albedo map of blend rule `blend`'s material: BRDF_ATLAS_BLEND_FLOOR
@@ -233,11 +233,7 @@ public:
     std::vector<float> albedo_map(std::size_t width, std::size_t height, const View &view,
                                   std::size_t samples,
                                   const std::atomic<std::int32_t> &cancel) const {
-        static_assert(sizeof(std::atomic<std::int32_t>) == sizeof(std::int32_t) &&
-                          std::atomic<std::int32_t>::is_always_lock_free,
-                      "the library reads the flag as a lock-free 32-bit atomic");
-        // The library reads it atomically; it never writes it.
-        const auto *flag = reinterpret_cast<const std::int32_t *>(&cancel);
+        const std::int32_t *flag = Model::flag(&cancel);
         if (width == 0 || height == 0 || width > BRDF_ATLAS_MAX_MAP_SIDE ||
             height > BRDF_ATLAS_MAX_MAP_SIDE) {
             check(brdf_atlas_model_albedo_map_cancellable(handle_, width, height, &view, samples,
@@ -261,10 +257,7 @@ public:
     Map map(std::size_t width, std::size_t height, const View &view, std::size_t samples = 0,
             std::int32_t blend = BRDF_ATLAS_BLEND_FLOOR,
             const std::atomic<std::int32_t> *cancel = nullptr) const {
-        static_assert(sizeof(std::atomic<std::int32_t>) == sizeof(std::int32_t) &&
-                          std::atomic<std::int32_t>::is_always_lock_free,
-                      "the library reads the flag as a lock-free 32-bit atomic");
-        const auto *flag = reinterpret_cast<const std::int32_t *>(cancel);
+        const std::int32_t *flag = Model::flag(cancel);
         if (width == 0 || height == 0 || width > BRDF_ATLAS_MAX_MAP_SIDE ||
             height > BRDF_ATLAS_MAX_MAP_SIDE) {
             check(brdf_atlas_model_map(handle_, width, height, &view, samples, blend, flag,
@@ -289,17 +282,19 @@ public:
 
     /// Build the fields a width x height map of `view` draws from and save
     /// every field the model holds beside it (MODEL.fields), so that later
-    /// maps, in any program, start from them; what `brdf-atlas fit` does
-    /// for the default view and [-3, 3]^2. Seconds for 100 materials: run
-    /// it off the GUI thread. Another thread can cancel it by setting
+    /// maps, in any program, start from them. Seconds for 100 materials:
+    /// run it off the GUI thread. Another thread can cancel it by setting
     /// `*cancel` to 1 (Error with BRDF_ATLAS_STATUS_CANCELLED, nothing saved).
     void prepare_map_fields(std::size_t width, std::size_t height, const View &view,
                             const std::atomic<std::int32_t> *cancel = nullptr) const {
-        static_assert(sizeof(std::atomic<std::int32_t>) == sizeof(std::int32_t) &&
-                          std::atomic<std::int32_t>::is_always_lock_free,
-                      "the library reads the flag as a lock-free 32-bit atomic");
-        const auto *flag = reinterpret_cast<const std::int32_t *>(cancel);
-        check(brdf_atlas_model_prepare_map_fields(handle_, width, height, &view, flag));
+        check(brdf_atlas_model_prepare_map_fields(handle_, width, height, &view, flag(cancel)));
+    }
+
+    /// prepare_map_fields() of what `brdf-atlas fit` saves: the default
+    /// view's and [-3, 3]^2's fields (whose region holds a viewer's windows
+    /// twice as wide as high), about 3 s for 100 materials.
+    void prepare_fit_fields(const std::atomic<std::int32_t> *cancel = nullptr) const {
+        check(brdf_atlas_model_prepare_fit_fields(handle_, flag(cancel)));
     }
 
     /// The GP's predictive variance of every pixel of the map of `view`
@@ -386,8 +381,17 @@ public:
     }
 
 private:
-    std::vector<float> map(std::size_t width, std::size_t height, const View *view,
-                           std::size_t samples) const {
+    /// A cancel flag as the C library takes it (NULL: none). The library
+    /// reads it atomically; it never writes it.
+    static const std::int32_t *flag(const std::atomic<std::int32_t> *cancel) {
+        static_assert(sizeof(std::atomic<std::int32_t>) == sizeof(std::int32_t) &&
+                          std::atomic<std::int32_t>::is_always_lock_free,
+                      "the library reads the flag as a lock-free 32-bit atomic");
+        return reinterpret_cast<const std::int32_t *>(cancel);
+    }
+
+    std::vector<float> plain_map(std::size_t width, std::size_t height, const View *view,
+                                 std::size_t samples) const {
         if (width == 0 || height == 0 || width > BRDF_ATLAS_MAX_MAP_SIDE ||
             height > BRDF_ATLAS_MAX_MAP_SIDE) {
             // Not worth allocating for: let the library say what is wrong.

@@ -367,10 +367,9 @@ private:
     void showPlausibility();
     void setBusy(bool busy, const QString &what);
     void fail(const QString &message);
-    /// Build the map's fields of the default view and of [-3, 3]^2 off the
-    /// GUI thread and save them beside the model (what `brdf-atlas fit`
-    /// does), for a model opened without them; the map is drawn again
-    /// once they are there.
+    /// Build the map's fields `brdf-atlas fit` saves (the default view's and
+    /// [-3, 3]^2's) off the GUI thread and save them beside the model, for a
+    /// model opened without them; the map is drawn again once they are there.
     void prepareFields(std::shared_ptr<const brdf_atlas::Model> model);
     QString nameFor(double x, double y) const;
 

@@ -252,12 +252,10 @@ void AtlasPanel::prepareFields(std::shared_ptr<const brdf_atlas::Model> model) {
     setBusy(true, kBuildingFields);
     fieldsCancel_ = std::make_shared<std::atomic<std::int32_t>>(0);
     fieldsWatcher_->setFuture(QtConcurrent::run([model, cancel = fieldsCancel_]() -> QString {
-        // A 1024 x 1024 map's fields, as `brdf-atlas fit` builds them: the
-        // panel's windows, twice as wide as high, lie inside [-3, 3]^2's.
-        const brdf_atlas::View wide{-3.0, 3.0, -3.0, 3.0};
+        // The fields `brdf-atlas fit` saves: the panel's windows, twice as
+        // wide as high, lie inside [-3, 3]^2's.
         try {
-            model->prepare_map_fields(1024, 1024, model->view(), cancel.get());
-            model->prepare_map_fields(1024, 1024, wide, cancel.get());
+            model->prepare_fit_fields(cancel.get());
         } catch (const brdf_atlas::Error &e) {
             if (e.status() == BRDF_ATLAS_STATUS_CANCELLED) return QString();
             return errorText(e);

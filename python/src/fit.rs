@@ -7,8 +7,8 @@ use std::time::{Duration, Instant};
 
 use brdf_atlas_core::limits::MAX_Q;
 use brdf_atlas_core::{
-    Atlas, BlendRule, Dataset, FitOptions, GplvmParams, Model, OptimizerKind, Precision, Progress,
-    TransformKind, View, default_kernel, fit_dir, store_path_for,
+    Atlas, Dataset, FitOptions, GplvmParams, Model, OptimizerKind, Precision, Progress,
+    TransformKind, default_kernel, fit_dir, store_path_for,
 };
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -255,9 +255,7 @@ pub fn fit<'py>(
 /// `brdf-atlas fit` does; the fields file, if one was written or was there.
 fn save_map_fields(model: &Path, progress: &dyn Progress) -> Result<Option<PathBuf>> {
     let atlas = Atlas::new(Model::open(model)?);
-    for view in [View::default(), View::wide()] {
-        atlas.prepare_fields((1024, 1024, view), BlendRule::default(), progress)?;
-    }
+    atlas.prepare_fit_fields(progress)?;
     let path = brdf_atlas_core::fields_path(model);
     Ok(path.exists().then_some(path))
 }

@@ -17,7 +17,7 @@ use brdf_atlas_core::{
 
 use std::time::{Duration, Instant};
 
-use brdf_atlas_core::{AlbedoMethod, Atlas, BlendRule, Model, View};
+use brdf_atlas_core::{AlbedoMethod, Atlas, Model, fit_field_views};
 
 use crate::args::{OptimizerArg, PrecisionArg, TransformArg};
 use crate::error::Error;
@@ -158,8 +158,8 @@ pub struct Fitted {
 
 /// The map's field `fit` built for the default view and saved beside the model.
 pub struct MapField {
-    /// What a 1024 x 1024 map of each view (the default one, then
-    /// [`View::wide`]) draws from: `Field` or `SampledField`; `None` when
+    /// What a [`brdf_atlas_core::FIT_FIELD_SIZE`] map of each of [`fit_field_views`] draws
+    /// from: `Field` or `SampledField`; `None` when
     /// neither fits its budget (the map integrates every pixel).
     pub methods: Vec<(&'static str, Option<AlbedoMethod>)>,
     /// The file written (`MODEL.fields`), if any.
@@ -237,29 +237,19 @@ pub fn fit(args: &Args) -> Result<Fitted, Error> {
     })
 }
 
-/// Build the map's fields of the default view and of [`View::wide`] (a
-/// 1024 x 1024 map's, of the default material) and save them beside the
-/// model ([`Atlas::prepare_fields`]): every view inside either's domain
+/// Build the map's fields of [`fit_field_views`] and save them beside the
+/// model ([`Atlas::prepare_fit_fields`]): every view inside either's domain
 /// (the map panel's too) is then drawn from them.
 fn map_field(model: &Path) -> Result<MapField, Error> {
     let t0 = Instant::now();
     let atlas = Atlas::new(Model::open(model)?);
-    let size = crate::cmd::map::DEFAULT_SIZE as usize;
-    let mut methods = Vec::new();
-    let mut saved = None;
-    for (name, view) in [
-        ("the default view", View::default()),
-        ("[-3, 3]^2", View::wide()),
-    ] {
-        let bars = Bars::new(format!("the map's field of {name}"));
-        let prepared = atlas.prepare_fields((size, size, view), BlendRule::default(), &bars);
-        drop(bars);
-        let (method, path) = prepared?;
-        methods.push((name, method));
-        saved = path.or(saved);
-    }
+    let bars = Bars::new("the map's fields");
+    let prepared = atlas.prepare_fit_fields(&bars);
+    drop(bars);
+    let (methods, saved) = prepared?;
+    let names = fit_field_views().map(|(name, _)| name);
     Ok(MapField {
-        methods,
+        methods: names.into_iter().zip(methods).collect(),
         saved,
         time: t0.elapsed(),
     })

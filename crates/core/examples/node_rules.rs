@@ -32,18 +32,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             Quadrature::banded_shaped(&fine, d, p, &shape),
         ));
     }
-    for (name, view) in [
-        ("default", View::default()),
-        (
-            "[-3,3]^2",
-            View {
-                x0: -3.0,
-                x1: 3.0,
-                y0: -3.0,
-                y1: 3.0,
-            },
-        ),
-    ] {
+    for (name, view) in [("default", View::default()), ("[-3,3]^2", View::wide())] {
         let mut rng = SplitMix64::new(7);
         let points: Vec<[f64; 2]> = (0..count)
             .map(|_| [rng.range(view.x0, view.x1), rng.range(view.y0, view.y1)])

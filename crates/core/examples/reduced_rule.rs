@@ -45,19 +45,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .collect();
     let sets = [
         ("default view", points(count, 1, View::default())),
-        (
-            "[-3, 3]^2",
-            points(
-                count,
-                2,
-                View {
-                    x0: -3.0,
-                    x1: 3.0,
-                    y0: -3.0,
-                    y1: 3.0,
-                },
-            ),
-        ),
+        ("[-3, 3]^2", points(count, 2, View::wide())),
         ("own points", own),
     ];
     let mut rules: Vec<(String, Quadrature)> =

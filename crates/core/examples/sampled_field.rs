@@ -22,18 +22,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Some(list) => list.split(',').map(str::parse).collect::<Result<_, _>>()?,
         None => vec![256, 1024, 4096],
     };
-    let views = [
-        ("default", View::default()),
-        (
-            "[-3,3]^2",
-            View {
-                x0: -3.0,
-                x1: 3.0,
-                y0: -3.0,
-                y1: 3.0,
-            },
-        ),
-    ];
+    let views = [("default", View::default()), ("[-3,3]^2", View::wide())];
     println!("view      samples    nodes  patches  estimate  build_s   max_err  mean_err");
     let points_of = |view: View| {
         let mut rng = SplitMix64::new(7);

@@ -37,15 +37,6 @@ fn atlas(path: &Path) -> Atlas {
     Atlas::new(Model::open(path).unwrap())
 }
 
-fn wide() -> View {
-    View {
-        x0: -3.0,
-        x1: 3.0,
-        y0: -3.0,
-        y1: 3.0,
-    }
-}
-
 fn map(atlas: &Atlas, view: View) -> AlbedoMap {
     atlas.map(MapRequest::new(512, 400).view(view)).unwrap()
 }
@@ -90,7 +81,7 @@ fn a_new_atlas_draws_from_the_saved_fields() {
     let built = nodes(&default.method).unwrap_or_else(|| panic!("{:?}", default.method));
     // A sampled field of a wide view too (the map's would be exact here).
     let sampled = first
-        .sampled_field(FieldRequest::new(wide(), 1 << 20), FIELD_SAMPLES)
+        .sampled_field(FieldRequest::new(View::wide(), 1 << 20), FIELD_SAMPLES)
         .unwrap()
         .unwrap();
     let saved = first.save_fields().unwrap().expect("new fields are saved");
@@ -109,7 +100,7 @@ fn a_new_atlas_draws_from_the_saved_fields() {
     assert_eq!(again.variance, default.variance);
     assert_eq!(nodes(&again.method), Some(built));
     let wide_again = second
-        .sampled_field(FieldRequest::new(wide(), 1 << 20), FIELD_SAMPLES)
+        .sampled_field(FieldRequest::new(View::wide(), 1 << 20), FIELD_SAMPLES)
         .unwrap()
         .unwrap();
     let x = [2.1, -1.7];

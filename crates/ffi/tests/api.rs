@@ -330,6 +330,12 @@ fn map_fields_are_built_saved_and_read_by_the_next_handle() {
     assert_eq!(s, BrdfAtlasStatus::Ok, "{}", last_error());
     assert!(n >= 1, "{n}");
     assert_eq!(map(&again), first);
+    // The pair `fit` saves: [-3, 3]^2's field joins the file.
+    let s = unsafe { brdf_atlas_model_prepare_fit_fields(again.0, null()) };
+    assert_eq!(s, BrdfAtlasStatus::Ok, "{}", last_error());
+    let (s, more) = saved(&Handle::open(&path));
+    assert_eq!(s, BrdfAtlasStatus::Ok, "{}", last_error());
+    assert!(more > n, "{more} after {n}");
     // A damaged file: BAD_FILE naming it, and maps as before.
     std::fs::write(&file, b"{\"format\": 3").unwrap();
     let damaged = Handle::open(&path);
@@ -341,6 +347,8 @@ fn map_fields_are_built_saved_and_read_by_the_next_handle() {
     let s = unsafe { brdf_atlas_model_saved_fields(h.0, null_mut()) };
     assert_eq!(s, BrdfAtlasStatus::NullArgument);
     let s = unsafe { brdf_atlas_model_prepare_map_fields(null(), 8, 8, null(), null()) };
+    assert_eq!(s, BrdfAtlasStatus::NullArgument);
+    let s = unsafe { brdf_atlas_model_prepare_fit_fields(null(), null()) };
     assert_eq!(s, BrdfAtlasStatus::NullArgument);
 }
 

@@ -282,7 +282,7 @@ impl Atlas {
         view.check()?;
         let floor = floor_of(rule)?;
         let domain = domain_of(view);
-        let same = |f: &Cached| f.domain == domain && f.floor == floor && f.samples == samples;
+        let same = |f: &Cached| f.is_for(domain, floor, samples);
         let cached = |f: &Cached| same(f) && (f.field.is_some() || f.budget >= budget);
         if let Some(f) = self.find_cached(cached) {
             return Ok(f.field.clone());
@@ -317,20 +317,7 @@ impl Atlas {
         floor: bool,
         samples: Option<usize>,
     ) -> Option<Arc<AlbedoField>> {
-        let holds = |c: &Cached| {
-            let d = c.domain;
-            c.field.is_some()
-                && c.floor == floor
-                && c.samples == samples
-                && d.x0 <= view.x0
-                && view.x1 <= d.x1
-                && d.y0 <= view.y0
-                && view.y1 <= d.y1
-        };
-        let area = |f: &AlbedoField| {
-            let d = f.domain();
-            (d.x1 - d.x0) * (d.y1 - d.y0)
-        };
+        let holds = |c: &Cached| c.floor == floor && c.samples == samples && c.domain.holds(view);
         let saved = self.loaded_fields().unwrap_or_default();
         self.fields
             .all()
@@ -338,7 +325,7 @@ impl Atlas {
             .chain(&saved)
             .filter(|c| holds(c))
             .filter_map(|c| c.field.clone())
-            .min_by(|a, b| area(a).total_cmp(&area(b)))
+            .min_by(|a, b| a.domain().area().total_cmp(&b.domain().area()))
     }
 
     /// The field a `pixels`-pixel map of `view` of `rule`'s material draws
@@ -604,9 +591,14 @@ pub(crate) struct Cached {
 }
 
 impl Cached {
+    /// The entry of `domain`, material `floor` and node rule `samples`.
+    fn is_for(&self, domain: View, floor: bool, samples: Option<usize>) -> bool {
+        self.domain == domain && self.floor == floor && self.samples == samples
+    }
+
     /// The same domain, material and node rule as `other`.
     pub(crate) fn same(&self, other: &Cached) -> bool {
-        self.domain == other.domain && self.floor == other.floor && self.samples == other.samples
+        self.is_for(other.domain, other.floor, other.samples)
     }
 }
 

@@ -23,7 +23,7 @@ pub use albedo_map::{AlbedoMap, AlbedoMethod, DEFAULT_SAMPLES, View};
 pub use contour::{Segment, contour_levels, contours, luminance};
 pub use exact_albedos::NODE_PHI_D_STEP;
 pub use lattice::{AlbedoLattice, LATTICE_TOLERANCE, lattice_path};
-pub use saved_fields::fields_path;
+pub use saved_fields::{FIT_FIELD_SIZE, fields_path, fit_field_views};
 
 use std::sync::{Arc, OnceLock};
 

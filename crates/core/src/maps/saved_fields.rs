@@ -38,12 +38,27 @@ const VERSION: u32 = 1;
 const MAX_SAVED_NODES: usize = 400_000;
 
 /// What reading the fields beside a model gave: its entries, or why they
-/// cannot be used.
+/// cannot be used (what the file's error says after its name).
 pub(crate) type Loaded = std::result::Result<Vec<Arc<Cached>>, String>;
 
 /// The atlas's slot for the saved entries: unread, or what was read (or
 /// last written).
 pub(crate) type Slot = std::sync::Mutex<Option<Loaded>>;
+
+/// The side, in pixels, of the maps whose fields `brdf-atlas fit` saves
+/// ([`fit_field_views`]): their budget is a map of this size's.
+pub const FIT_FIELD_SIZE: usize = 1024;
+
+/// The views, named, whose maps' fields `brdf-atlas fit` (and Python's
+/// `fit`) builds and saves beside the model: the default view, and
+/// [`View::wide`], whose domain holds the map panel's windows (twice as
+/// wide as high, so reaching outside the default view).
+pub fn fit_field_views() -> [(&'static str, View); 2] {
+    [
+        ("the default view", View::default()),
+        ("[-3, 3]^2", View::wide()),
+    ]
+}
 
 /// The fields file of the model at `model_path`: `MODEL.fields` beside it.
 pub fn fields_path(model_path: &Path) -> PathBuf {
@@ -103,16 +118,12 @@ impl SavedPatch {
     fn patch(self, domain: View, channels: usize) -> std::result::Result<Patch, String> {
         let rect = self.rect;
         rect.check().map_err(|e| e.to_string())?;
-        let inside = domain.x0 <= rect.x0
-            && rect.x1 <= domain.x1
-            && domain.y0 <= rect.y0
-            && rect.y1 <= domain.y1;
         let grid_ok = |g: &[f64], lo: f64, hi: f64| {
             g.len() >= 2
                 && g.iter().all(|v| v.is_finite() && lo <= *v && *v <= hi)
                 && g.windows(2).all(|w| w[0] < w[1])
         };
-        if !inside
+        if !domain.holds(rect)
             || !grid_ok(&self.xs, rect.x0, rect.x1)
             || !grid_ok(&self.ys, rect.y0, rect.y1)
             || self.values.len() != self.xs.len() * self.ys.len() * channels
@@ -134,9 +145,8 @@ impl SavedPatch {
 /// Patches that cover `domain`: inside it (checked per patch), with areas
 /// adding up to its own.
 fn covers(domain: View, patches: &[Patch]) -> bool {
-    let area = |v: &View| (v.x1 - v.x0) * (v.y1 - v.y0);
-    let sum: f64 = patches.iter().map(|p| area(&p.rect)).sum();
-    !patches.is_empty() && (sum - area(&domain)).abs() <= 1e-9 * area(&domain)
+    let sum: f64 = patches.iter().map(|p| p.rect.area()).sum();
+    !patches.is_empty() && (sum - domain.area()).abs() <= 1e-9 * domain.area()
 }
 
 fn rule_name(floor: bool) -> &'static str {
@@ -200,13 +210,13 @@ impl Entry {
 impl Atlas {
     /// The fields saved beside the model ([`fields_path`]), read on first
     /// use: how many entries (fields, and domains given up) it holds, `0`
-    /// when there is no file, an error naming the file when it cannot be
-    /// used (damaged, or written for another fit); maps then build what
-    /// they need, as without it.
+    /// when there is no file, [`CoreError::BadFile`] naming the file when it
+    /// cannot be used (unreadable, damaged, or written for another fit);
+    /// maps then build what they need, as without it.
     pub fn saved_fields(&self) -> Result<usize> {
         match self.loaded_fields() {
             Ok(entries) => Ok(entries.len()),
-            Err(why) => Err(CoreError::BadQuery(why)),
+            Err(why) => Err(CoreError::bad_file(fields_path(self.model.path()), why)),
         }
     }
 
@@ -219,7 +229,11 @@ impl Atlas {
             if !path.exists() {
                 return Ok(Vec::new());
             }
-            self.read_fields(&path).map_err(|e| e.to_string())
+            self.read_fields(&path).map_err(|e| match e {
+                CoreError::BadFile { why, .. } => why,
+                CoreError::Io { source, .. } => source.to_string(),
+                e => e.to_string(),
+            })
         })
         .clone()
     }
@@ -292,9 +306,8 @@ impl Atlas {
     /// Build what a `width x height` map of `view` of `rule`'s material
     /// draws from (the exact field where it fits its budget, else the
     /// sampled one, [`Atlas::map`]) and save it beside the model
-    /// ([`Atlas::save_fields`]): what `brdf-atlas fit` does for the default
-    /// view and for [`View::wide`], so that the first map after the fit, in
-    /// any process, only evaluates them. How such a map is then drawn (`None`: every pixel
+    /// ([`Atlas::save_fields`]), so that such maps, in any process, only
+    /// evaluate it. How such a map is then drawn (`None`: every pixel
     /// integrated, no field fits its budget), and the file written (`None`
     /// when it held the field already).
     pub fn prepare_fields(
@@ -303,10 +316,39 @@ impl Atlas {
         rule: BlendRule,
         progress: &dyn Progress,
     ) -> Result<(Option<AlbedoMethod>, Option<PathBuf>)> {
-        self.check_map_request(width, height, view)?;
-        let method = self
-            .map_field(view, width * height, rule, progress)?
-            .map(|(field, sampled)| AlbedoMethod::of_field(&field, sampled));
+        let method = self.build_map_field((width, height, view), rule, progress)?;
         Ok((method, self.save_fields()?))
+    }
+
+    /// What `brdf-atlas fit` does after the fit: [`Atlas::prepare_fields`]
+    /// of each of [`fit_field_views`] at [`FIT_FIELD_SIZE`] pixels a side,
+    /// of the default material, saved once. How each view's map is then
+    /// drawn, in that order, and the file written.
+    pub fn prepare_fit_fields(
+        &self,
+        progress: &dyn Progress,
+    ) -> Result<(Vec<Option<AlbedoMethod>>, Option<PathBuf>)> {
+        let size = FIT_FIELD_SIZE;
+        let methods = fit_field_views()
+            .into_iter()
+            .map(|(_, view)| {
+                self.build_map_field((size, size, view), BlendRule::default(), progress)
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok((methods, self.save_fields()?))
+    }
+
+    /// The field a `width x height` map of `view` draws from, built and
+    /// kept; how the map is drawn from it (`None`: per pixel).
+    fn build_map_field(
+        &self,
+        (width, height, view): (usize, usize, View),
+        rule: BlendRule,
+        progress: &dyn Progress,
+    ) -> Result<Option<AlbedoMethod>> {
+        self.check_map_request(width, height, view)?;
+        Ok(self
+            .map_field(view, width * height, rule, progress)?
+            .map(|(field, sampled)| AlbedoMethod::of_field(&field, sampled)))
     }
 }

@@ -60,6 +60,16 @@ impl View {
         }
     }
 
+    /// Whether `other` lies inside this window (edges included).
+    pub fn holds(&self, other: View) -> bool {
+        self.x0 <= other.x0 && other.x1 <= self.x1 && self.y0 <= other.y0 && other.y1 <= self.y1
+    }
+
+    /// The window's area.
+    pub fn area(&self) -> f64 {
+        (self.x1 - self.x0) * (self.y1 - self.y0)
+    }
+
     /// Check the window is finite and not empty.
     pub fn check(&self) -> Result<()> {
         let ok = [self.x0, self.x1, self.y0, self.y1]
