@@ -390,9 +390,15 @@ fn write_map_field(out: &mut impl Write, f: &MapField) -> io::Result<()> {
             Some(AlbedoMethod::Field { nodes, .. }) => {
                 format!("{view}'s exact albedos at {nodes} nodes")
             }
-            Some(AlbedoMethod::SampledField { samples, nodes, .. }) => {
-                format!("{view}'s albedos integrated with {samples} samples at {nodes} nodes")
-            }
+            Some(AlbedoMethod::SampledField {
+                samples,
+                nodes,
+                check,
+                ..
+            }) => format!(
+                "{view}'s albedos integrated with {samples} samples at {nodes} nodes{}",
+                crate::format::field_check(check)
+            ),
             _ => format!("none for {view} within its budget (its maps integrate every pixel)"),
         })
         .collect();

@@ -196,10 +196,20 @@ pub fn draw(
             nodes,
             patches,
             estimate,
+            check,
         } => format!(
-            "sampled albedo field of the {} transform: albedos integrated with {samples} quadrature samples at {nodes} nodes, a polynomial on {patches} patches (error estimate {:.2}%; `brdf-atlas prepare` for exact albedos)",
+            "sampled albedo field of the {} transform: albedos integrated with {samples} quadrature samples at {nodes} nodes, a polynomial on {patches} patches{}; `brdf-atlas prepare` for exact albedos",
             model.file().transform.name(),
-            100.0 * estimate
+            // The refinement's estimate says how well the polynomial
+            // follows the sampled rule, not how far that rule is from the
+            // albedo: shown only where no check was made.
+            match check {
+                Some(_) => crate::format::field_check(check),
+                None => format!(
+                    " (error estimate against the nodes' own rule {:.2}%)",
+                    100.0 * estimate
+                ),
+            }
         ),
         AlbedoMethod::Lattice {
             nodes,

@@ -62,8 +62,13 @@ fn describe(method: &AlbedoMethod) -> String {
             nodes,
             patches,
             estimate,
+            check,
         } => format!(
-            "sampled field: {samples} samples, {nodes} nodes, {patches} patches, estimate {estimate:.1e}"
+            "sampled field: {samples} samples, {nodes} nodes, {patches} patches, estimate {estimate:.1e}{}",
+            check.map_or(String::new(), |c| format!(
+                ", checked at {} points: {:.1e} / {:.1e}",
+                c.points, c.worst, c.mean
+            ))
         ),
         AlbedoMethod::Quadrature { samples, bins } => format!("quadrature {samples} ({bins} bins)"),
         AlbedoMethod::Lattice {

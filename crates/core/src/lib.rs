@@ -65,11 +65,11 @@ pub use gplvm::{CheckedParams, DriftStats, Fit, GplvmParams, GramData, Kernel, O
 pub use locate::Located;
 pub use maps::{
     AlbedoField, AlbedoLattice, AlbedoMap, AlbedoMethod, AlbedoRequest, Atlas, DEFAULT_SAMPLES,
-    FIELD_SAMPLES, FIT_FIELD_SIZE, FieldRequest, Integration, LATTICE_TOLERANCE, MapRequest,
-    NODE_PHI_D_STEP, Segment, View, contour_levels, contours, fields_path, fit_field_views,
-    lattice_path, luminance,
+    FIELD_SAMPLES, FIT_FIELD_SIZE, FieldCheck, FieldRequest, Integration, LATTICE_TOLERANCE,
+    MapRequest, NODE_PHI_D_STEP, Segment, View, contour_levels, contours, fields_path,
+    fit_field_views, lattice_path, luminance,
 };
-pub use maps::{albedo_field, lattice, map_error};
+pub use maps::{albedo_field, field_check, lattice, map_error};
 pub use model::blend::soft_floor;
 pub use model::blend::{Blend, BlendRule, Confidence, LOW_CONFIDENCE_VARIANCE, Plausibility};
 pub use model::{FitRecord, InputIdentity, Model, ModelFile, StoreRef, store_path_for};

@@ -4,13 +4,18 @@
 //! maps are the same bits as the atlas's that built them, a view inside a
 //! saved field's domain is drawn from it, and a file that cannot be used
 //! (truncated, of another fit, damaged, a directory) is named and left
-//! aside, the map built anew and the file replaced by the next save.
+//! aside, the map built anew and the file replaced by the next save. A
+//! sampled field's check (its error against exact albedos) is what the
+//! dense rule says at its points, and survives the file.
 
 use std::path::{Path, PathBuf};
 
+use brdf_atlas_core::field_check::check_points;
+use brdf_atlas_core::map_error::{albedo_error, reference_albedo};
 use brdf_atlas_core::{
-    AlbedoMap, AlbedoMethod, Atlas, FIELD_SAMPLES, FieldRequest, FitOptions, GplvmParams,
-    MapRequest, Model, NoProgress, Precision, TransformKind, View, fields_path, fit_dir,
+    AlbedoMap, AlbedoMethod, Atlas, BlendRule, FIELD_SAMPLES, FieldRequest, FitOptions,
+    GplvmParams, MapRequest, Model, NoProgress, Precision, TransformKind, View, fields_path,
+    fit_dir,
 };
 use brdf_merl::{Dims, synth};
 
@@ -206,4 +211,69 @@ fn a_saved_fields_file_that_cannot_be_used_is_named_and_left_aside() {
         assert_eq!(fresh.save_fields().unwrap(), Some(file.clone()), "{what}");
         assert!(atlas(&path).saved_fields().unwrap() >= 1, "{what}");
     }
+}
+
+/// A sampled field of the default view from a rule of `samples` samples
+/// (few, so that its error is plain to see).
+fn sampled(atlas: &Atlas, samples: usize) -> std::sync::Arc<brdf_atlas_core::AlbedoField> {
+    atlas
+        .sampled_field(FieldRequest::new(View::default(), 1 << 20), samples)
+        .unwrap()
+        .expect("a field within a million nodes")
+}
+
+#[test]
+fn a_sampled_fields_check_is_its_error_against_the_dense_rule_at_its_points() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = fit(tmp.path());
+    let atlas = atlas(&path);
+    let field = sampled(&atlas, 16);
+    let check = field
+        .check()
+        .expect("a sampled field is checked when built");
+    let points = check_points(field.domain());
+    assert_eq!(check.points, points.len());
+    // Independently: the dense rule value by value through the blend (on
+    // grids this coarse the nodes' rule is the dense rule itself).
+    let model = atlas.model();
+    let want: Vec<[f64; 3]> = points
+        .iter()
+        .map(|p| reference_albedo(model, p, BlendRule::Floor, model.albedo_rule()).unwrap())
+        .collect();
+    let got: Vec<[f64; 3]> = points.iter().map(|p| field.at(*p).0).collect();
+    let (worst, mean) = albedo_error(&got, &want);
+    assert!(
+        (worst - check.worst).abs() <= 1e-9 && (mean - check.mean).abs() <= 1e-9,
+        "check {check:?}, recomputed {worst} / {mean}"
+    );
+    assert!(check.worst > 1e-3, "16 samples are visibly off: {check:?}");
+    assert!(check.mean <= check.worst);
+}
+
+#[test]
+fn a_fields_check_is_saved_and_a_file_without_one_still_serves() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = fit(tmp.path());
+    let first = atlas(&path);
+    let built = sampled(&first, 16);
+    first.save_fields().unwrap();
+    let read = sampled(&atlas(&path), 16);
+    assert_eq!(
+        read.check(),
+        built.check(),
+        "the check comes back from the file"
+    );
+    // A file written before fields were checked: no check, still used
+    // (a field built anew would carry one).
+    edit_file(&path, |json| {
+        for entry in json["entries"].as_array_mut().unwrap() {
+            if let Some(field) = entry["field"].as_object_mut() {
+                field.remove("check");
+            }
+        }
+    });
+    let old = sampled(&atlas(&path), 16);
+    assert_eq!(old.check(), None);
+    assert_eq!(old.nodes(), built.nodes());
+    assert_eq!(old.at([0.1, -0.2]), built.at([0.1, -0.2]));
 }

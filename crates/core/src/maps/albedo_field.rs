@@ -69,6 +69,7 @@ use crate::dense::product::matmul;
 use crate::error::{CoreError, Result};
 use crate::maps::Atlas;
 use crate::maps::exact_albedos::RuleRows;
+use crate::maps::field_check::FieldCheck;
 use crate::maps::patches::{Patch, eval_point, find, grid_points, refine};
 use crate::maps::view::View;
 use crate::model::blend::pass_weights::floor_of;
@@ -123,6 +124,8 @@ pub struct AlbedoField {
     albedo: Vec<Patch>,
     variance: Vec<Patch>,
     nodes: usize,
+    /// A sampled field's error against exact albedos, measured when built.
+    check: Option<FieldCheck>,
 }
 
 impl AlbedoField {
@@ -141,6 +144,14 @@ impl AlbedoField {
     /// The largest variance error estimate of its patches (absolute).
     pub fn variance_estimate(&self) -> f64 {
         self.variance.iter().map(|p| p.estimate).fold(0.0, f64::max)
+    }
+
+    /// A sampled field's error against exact albedos at a few points of
+    /// its domain, measured when it was built ([`FieldCheck`]); `None` for
+    /// an exact field (whose estimate says its error), or one saved before
+    /// fields were checked.
+    pub fn check(&self) -> Option<FieldCheck> {
+        self.check
     }
 
     /// Exact albedos the field was built from.
@@ -508,7 +519,7 @@ impl Atlas {
         else {
             return Ok(None);
         };
-        Ok(Some(self.with_variance(domain, albedo, nodes)?))
+        Ok(Some(self.with_variance(domain, albedo, nodes, None)?))
     }
 
     /// The sampled field of `domain` ([`Atlas::sampled_field`]): the
@@ -554,11 +565,23 @@ impl Atlas {
                 }
             }
         }
-        Ok(Some(self.with_variance(domain, albedo, nodes)?))
+        let check = self.check_field(domain, &albedo, floor)?;
+        Ok(Some(self.with_variance(
+            domain,
+            albedo,
+            nodes,
+            Some(check),
+        )?))
     }
 
     /// A field of `domain` from its albedo patches, with the variance's.
-    fn with_variance(&self, domain: View, albedo: Vec<Patch>, nodes: usize) -> Result<AlbedoField> {
+    fn with_variance(
+        &self,
+        domain: View,
+        albedo: Vec<Patch>,
+        nodes: usize,
+        check: Option<FieldCheck>,
+    ) -> Result<AlbedoField> {
         let variance = refine(
             domain,
             1,
@@ -573,6 +596,7 @@ impl Atlas {
             albedo,
             variance,
             nodes,
+            check,
         })
     }
 }
@@ -624,12 +648,14 @@ impl AlbedoField {
         albedo: Vec<Patch>,
         variance: Vec<Patch>,
         nodes: usize,
+        check: Option<FieldCheck>,
     ) -> AlbedoField {
         AlbedoField {
             domain,
             albedo,
             variance,
             nodes,
+            check,
         }
     }
 

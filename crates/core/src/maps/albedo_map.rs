@@ -30,6 +30,7 @@ use crate::error::{CoreError, Result};
 use crate::maps::Atlas;
 use crate::maps::albedo_field::variances;
 use crate::maps::exact_albedos::pixel_terms;
+use crate::maps::field_check::FieldCheck;
 use crate::maps::lattice::AlbedoLattice;
 use crate::maps::patches::eval_row;
 use crate::maps::pixel_rule::PixelRule;
@@ -76,6 +77,10 @@ pub enum AlbedoMethod {
         /// The refinement's error estimate against the nodes' own rule,
         /// relative to a node's largest channel.
         estimate: f64,
+        /// The field's error against exact albedos at a few points,
+        /// measured when it was built (`None` for a field saved before
+        /// fields were checked).
+        check: Option<FieldCheck>,
     },
     /// The cubic of the prepared map's adaptive lattice of exact albedos
     /// ([`crate::maps::lattice`]), saved beside the model.
@@ -211,6 +216,7 @@ impl AlbedoMethod {
                 nodes: field.nodes(),
                 patches: field.patches(),
                 estimate: field.estimate(),
+                check: field.check(),
             },
         }
     }

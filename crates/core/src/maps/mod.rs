@@ -11,6 +11,7 @@ pub mod albedo_field;
 pub mod albedo_map;
 pub mod contour;
 mod exact_albedos;
+pub mod field_check;
 pub mod lattice;
 pub mod map_error;
 mod patches;
@@ -39,6 +40,7 @@ use recent::Recent;
 pub use albedo_field::{AlbedoField, FIELD_SAMPLES, FieldRequest};
 pub use albedo_map::MapRequest;
 pub use exact_albedos::{AlbedoRequest, Integration};
+pub use field_check::FieldCheck;
 
 /// The maps of one fitted model: a shared [`Model`] and what its maps
 /// need and keep between them (the per-material albedos, the rows of the

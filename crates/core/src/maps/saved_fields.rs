@@ -20,6 +20,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result};
 use crate::maps::albedo_field::{AlbedoField, Cached};
+use crate::maps::field_check::FieldCheck;
 use crate::maps::patches::Patch;
 use crate::maps::view::View;
 use crate::maps::{AlbedoMethod, Atlas};
@@ -30,7 +31,9 @@ const FORMAT: &str = "brdf-atlas fields";
 /// 1: sampled fields' nodes from the per-pixel rule's kind of rule
 /// ([`crate::FIELD_SAMPLES`]), exact ones from the nodes' rule
 /// ([`crate::NODE_PHI_D_STEP`]), planned on the
-/// [`DEFAULT_SAMPLES`](crate::DEFAULT_SAMPLES)-sample rule.
+/// [`DEFAULT_SAMPLES`](crate::DEFAULT_SAMPLES)-sample rule. A sampled
+/// field may carry its check ([`FieldCheck`]); files written before
+/// fields were checked have none, and are read as they are.
 const VERSION: u32 = 1;
 /// The most nodes the file keeps over all its fields (the newest first): a
 /// sampled field of the default view of 100 materials has about 50,000,
@@ -89,6 +92,10 @@ struct Entry {
 #[derive(Serialize, Deserialize)]
 struct SavedField {
     nodes: usize,
+    /// A sampled field's check ([`crate::FieldCheck`]); absent for an
+    /// exact field, and in files written before fields were checked.
+    #[serde(default)]
+    check: Option<FieldCheck>,
     albedo: Vec<SavedPatch>,
     variance: Vec<SavedPatch>,
 }
@@ -162,6 +169,7 @@ impl Entry {
             budget: c.budget,
             field: c.field.as_ref().map(|f| SavedField {
                 nodes: f.nodes(),
+                check: f.check(),
                 albedo: f.albedo_patches().iter().map(SavedPatch::of).collect(),
                 variance: f.variance_patches().iter().map(SavedPatch::of).collect(),
             }),
@@ -193,7 +201,7 @@ impl Entry {
                     return Err(format!("the field of {domain:?} does not cover it"));
                 }
                 Some(Arc::new(AlbedoField::from_parts(
-                    domain, albedo, variance, f.nodes,
+                    domain, albedo, variance, f.nodes, f.check,
                 )))
             }
         };
