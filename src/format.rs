@@ -76,6 +76,21 @@ pub fn coordinates(x: &[f64], digits: usize) -> String {
         .join(", ")
 }
 
+/// What a sampled field's check says, for a summary line: `, 4.9% off
+/// exact albedos at worst and 0.62% on average at 32 points of its domain`,
+/// or nothing for a field saved before fields were checked.
+pub fn field_check(check: Option<brdf_atlas_core::FieldCheck>) -> String {
+    match check {
+        Some(c) => format!(
+            ", {} off exact albedos at worst and {} on average at {} points of its domain",
+            pct(c.worst),
+            pct(c.mean),
+            c.points
+        ),
+        None => String::new(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -125,20 +140,5 @@ mod tests {
         assert_eq!(pct(5e-5), "5.0e-3%");
         assert_eq!(point(&[0.3, -0.5]), "(0.3000, -0.5000)");
         assert_eq!(coordinates(&[0.3, -0.5], 3), "0.300, -0.500");
-    }
-}
-
-/// What a sampled field's check says, for a summary line: `, 4.9% off
-/// exact albedos at worst and 0.62% on average at 32 points of its domain`,
-/// or nothing for a field saved before fields were checked.
-pub fn field_check(check: Option<brdf_atlas_core::FieldCheck>) -> String {
-    match check {
-        Some(c) => format!(
-            ", {} off exact albedos at worst and {} on average at {} points of its domain",
-            pct(c.worst),
-            pct(c.mean),
-            c.points
-        ),
-        None => String::new(),
     }
 }

@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use brdf_atlas_core::{Atlas, BlendRule, DEFAULT_SAMPLES, Model, View};
+use brdf_atlas_core::{Atlas, BlendRule, Model, View};
 use brdf_merl::MerlFile;
 use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArray4};
@@ -309,9 +309,13 @@ impl PyModel {
     /// `view = (x0, x1, y0, y1)` (default: the box [-1, 1]^2 with a 10%
     /// margin): linear RGB albedo, (height, width, 3) float32, row 0 at the
     /// top (largest y). `samples`: quadrature points per pixel; None means
-    /// the library's default (the albedo field where it fits its budget, 256
-    /// samples a pixel otherwise; exact, from blended per-material albedos,
-    /// for a raw model's GP blend). `blend`: the material each pixel shows,
+    /// the library's default, as the command-line `map` draws: the prepared
+    /// lattice inside its window (`brdf-atlas prepare`), else a field the
+    /// model holds or that was saved beside it (`fit` saves those of the
+    /// default view and of [-3, 3]^2) whose domain holds the view, else the
+    /// view's own exact or sampled field where it fits its budget, else
+    /// 256 samples a pixel; exact, from blended per-material albedos, for
+    /// a raw model's GP blend. `blend`: the material each pixel shows,
     /// "floor" (the default, what `material` gives) or "gp" (the plausible
     /// rule has no map). 2-D models only.
     #[pyo3(signature = (width = 256, height = 256, view = None, samples = None, blend = "floor"))]
@@ -332,9 +336,7 @@ impl PyModel {
                     Failure::input(format!("samples = {s}: expected 1 to {MAX_SAMPLES}")).into(),
                 );
             }
-            Some(s) => Some(s),
-            None if self.inner.file().transform.is_linear() && rule == BlendRule::Gp => None,
-            None => Some(DEFAULT_SAMPLES),
+            s => s,
         };
         let map = py
             .detach(|| {

@@ -3,13 +3,14 @@ bit), the command-line tool's eval (at the precision it prints) and
 reconstruct (the file's bytes), and the tables themselves."""
 
 import ctypes
+import json
 import subprocess
 
 import numpy as np
 import pytest
 
 import brdf_atlas as ba
-from conftest import DIMS, LAMBERTIAN, point_of
+from conftest import DIMS, LAMBERTIAN, NOISE, point_of
 
 
 def angle_pairs(n, seed):
@@ -161,6 +162,30 @@ def test_albedo_map(request, which):
         assert np.allclose(one[0, 0], rho, rtol=rtol), (name, one[0, 0])
 
 
+def test_the_default_map_is_drawn_from_the_fields_fit_saved(data, tmp_path):
+    # As every other program's: the map of a model fresh from `fit` is
+    # drawn from the fields saved beside it (shown by doubling every saved
+    # albedo value and finding the map doubled), not integrated per pixel.
+    out = tmp_path / "m.atlas"
+    ba.fit(data, out, noise=NOISE)
+    before = ba.Model(out).albedo_map(40, 30)
+    fields = tmp_path / "m.fields"
+    doc = json.loads(fields.read_text())
+    doubled = 0
+    for entry in doc["entries"]:
+        for patch in (entry.get("field") or {}).get("albedo", []):
+            patch["values"] = [2.0 * v for v in patch["values"]]
+            doubled += 1
+    assert doubled > 0
+    fields.write_text(json.dumps(doc))
+    after = ba.Model(out).albedo_map(40, 30)
+    assert before.max() > 0.01
+    assert np.allclose(after, 2.0 * before, rtol=1e-6, atol=1e-9)
+    # A sample count asks for per-pixel integration: the file plays no part.
+    per_pixel = ba.Model(out).albedo_map(40, 30, samples=256)
+    assert not np.allclose(per_pixel, after, rtol=0.1)
+
+
 @pytest.mark.parametrize("which", ["log_model", "raw_model"])
 def test_the_default_map_is_the_floor_rule_s(request, which):
     model = request.getfixturevalue(which)
@@ -182,7 +207,6 @@ def test_plausibility_and_confidence_equal_the_cli_record(log_model, cli, tmp_pa
     out = subprocess.run([str(cli), "reconstruct", str(log_model.path), "--at", f"{x[0]!r},{x[1]!r}",
                           "--blend", blend, "--json", "-o", str(tmp_path / "m.binary")],
                          check=True, capture_output=True, text=True).stdout
-    import json
     rec = json.loads(out)
     p = log_model.plausibility(x, blend=blend)
     for key in ["clamped_reflectance", "clamped_values", "max_albedo", "max_albedo_incidence"]:
