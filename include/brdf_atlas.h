@@ -691,6 +691,35 @@ enum BrdfAtlasStatus brdf_atlas_model_map(const struct BrdfAtlasModel *model,
                                           size_t variance_len);
 
 /**
+ * What a viewer draws while its window moves: `brdf_atlas_model_map`
+ * from what the model already holds, never building anything. Inside
+ * the prepared map's window or a field the model holds (built by an
+ * earlier map in this program, or saved beside the model: `fit` saves
+ * those of the default window and of [-3, 3]^2) the pixels are that
+ * map's or field's, the same as `brdf_atlas_model_map` with `samples` 0
+ * gives; elsewhere every pixel is integrated with `samples` samples (1
+ * to `BRDF_ATLAS_MAX_SAMPLES`). So a preview and the full map of a
+ * window agree, and no preview waits for a field to be built: a
+ * 60 x 30 preview from a field costs well under a millisecond.
+ *
+ * Ownership and returns as `brdf_atlas_model_map` (INVALID_ARGUMENT for
+ * `samples` 0).
+ *
+ * # Safety
+ * As `brdf_atlas_model_map`, without a cancel flag.
+ */
+enum BrdfAtlasStatus brdf_atlas_model_map_preview(const struct BrdfAtlasModel *model,
+                                                  size_t width,
+                                                  size_t height,
+                                                  const struct BrdfAtlasView *view,
+                                                  size_t samples,
+                                                  int32_t blend,
+                                                  float *buf,
+                                                  size_t len,
+                                                  float *variance,
+                                                  size_t variance_len);
+
+/**
  * What `brdf-atlas fit` does after the fit: build the fields 1024 x 1024
  * maps of the default window and of [-3, 3]^2 draw from (whose region
  * holds a viewer's windows twice as wide as high) and save them beside

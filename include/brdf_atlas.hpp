@@ -270,6 +270,24 @@ public:
         return out;
     }
 
+    /// What a viewer draws while its window moves (brdf_atlas_model_map_preview):
+    /// from the prepared map or a field the model holds, the same pixels as
+    /// map() gives, never building anything; elsewhere every pixel
+    /// integrated with `samples` (at least 1) samples.
+    Map preview(std::size_t width, std::size_t height, const View &view, std::size_t samples,
+                std::int32_t blend = BRDF_ATLAS_BLEND_FLOOR) const {
+        if (width == 0 || height == 0 || width > BRDF_ATLAS_MAX_MAP_SIDE ||
+            height > BRDF_ATLAS_MAX_MAP_SIDE) {
+            check(brdf_atlas_model_map_preview(handle_, width, height, &view, samples, blend,
+                                               nullptr, 0, nullptr, 0));
+        }
+        Map out{std::vector<float>(width * height * 3), std::vector<float>(width * height)};
+        check(brdf_atlas_model_map_preview(handle_, width, height, &view, samples, blend,
+                                           out.rgb.data(), out.rgb.size(), out.variance.data(),
+                                           out.variance.size()));
+        return out;
+    }
+
     /// How many entries (fields, and regions whose exact field is over
     /// budget) the fields saved beside the model hold: 0 when there are
     /// none. Throws Error (BRDF_ATLAS_STATUS_BAD_FILE) when the file cannot

@@ -145,10 +145,10 @@ inline void checkPlausibilityShown(const QString &model, AtlasPanel *panel,
 // of that window pixel for pixel: its albedo map with `samples` quadrature
 // samples (0: the full map's), faded by the map's variance.
 inline bool sameAsLibraryMap(const brdf_atlas::Model &m, const QImage &image, const BrdfAtlasView &window,
-                             std::size_t samples) {
+                             std::size_t samples, bool preview = false) {
     const brdf_atlas::View v{window.x0, window.x1, window.y0, window.y1};
     const int w = image.width(), h = image.height();
-    const brdf_atlas::Model::Map map = m.map(w, h, v, samples);
+    const brdf_atlas::Model::Map map = preview ? m.preview(w, h, v, samples) : m.map(w, h, v, samples);
     const std::vector<float> &rgb = map.rgb, &variance = map.variance;
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {

@@ -264,10 +264,12 @@ AtlasMapView::MapResult AtlasMapView::computeMap(std::shared_ptr<const brdf_atla
     try {
         // The albedo and the variance (which fades the map where the model
         // knows little) from one call: the full map's variance then comes
-        // from the field its albedo does, not a product a pixel.
+        // from the field its albedo does, not a product a pixel. A preview
+        // takes the field the model holds for the window (so it is the full
+        // map's picture, smaller), else kPreviewSamples samples a pixel.
         const brdf_atlas::Model::Map map =
             req.level == kPreview
-                ? model->map(width, height, win, kPreviewSamples)
+                ? model->preview(width, height, win, kPreviewSamples)
                 : model->map(width, height, win, 0, BRDF_ATLAS_BLEND_FLOOR, cancel.get());
         const std::vector<float> &rgb = map.rgb;
         const std::vector<float> &variance = map.variance;

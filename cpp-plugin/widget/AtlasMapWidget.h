@@ -165,8 +165,9 @@ public:
     /// Contour levels drawn.
     static constexpr int kContourLevels = 12;
     /// Map levels: the preview drawn while the window moves (a side
-    /// kPreviewDivisor times smaller, kPreviewSamples quadrature samples a
-    /// pixel), and the full map (the library's default rule) once it stops.
+    /// kPreviewDivisor times smaller, from the field the model holds for
+    /// the window, else kPreviewSamples quadrature samples a pixel), and
+    /// the full map (the library's default rule) once it stops.
     static constexpr int kPreview = 0;
     static constexpr int kFull = 1;
     static constexpr int kPreviewDivisor = 6;

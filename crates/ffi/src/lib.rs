@@ -66,9 +66,9 @@ pub use consts::{
 pub use contour::{BrdfAtlasSegment, brdf_atlas_contour_levels, brdf_atlas_contours};
 pub use map::{
     brdf_atlas_model_albedo_map, brdf_atlas_model_albedo_map_cancellable,
-    brdf_atlas_model_albedo_map_with, brdf_atlas_model_map, brdf_atlas_model_prepare_fit_fields,
-    brdf_atlas_model_prepare_map_fields, brdf_atlas_model_saved_fields,
-    brdf_atlas_model_variance_map,
+    brdf_atlas_model_albedo_map_with, brdf_atlas_model_map, brdf_atlas_model_map_preview,
+    brdf_atlas_model_prepare_fit_fields, brdf_atlas_model_prepare_map_fields,
+    brdf_atlas_model_saved_fields, brdf_atlas_model_variance_map,
 };
 pub use model::{
     BrdfAtlasDims, BrdfAtlasModel, BrdfAtlasView, brdf_atlas_model_dims, brdf_atlas_model_free,

@@ -263,7 +263,57 @@ pub unsafe extern "C" fn brdf_atlas_model_map(
             map_into(
                 model,
                 (width, height, view, samples, rule),
-                &*progress,
+                (&*progress, false),
+                (buf, len),
+                variance,
+            )
+        }
+    })
+}
+
+/// What a viewer draws while its window moves: `brdf_atlas_model_map`
+/// from what the model already holds, never building anything. Inside
+/// the prepared map's window or a field the model holds (built by an
+/// earlier map in this program, or saved beside the model: `fit` saves
+/// those of the default window and of [-3, 3]^2) the pixels are that
+/// map's or field's, the same as `brdf_atlas_model_map` with `samples` 0
+/// gives; elsewhere every pixel is integrated with `samples` samples (1
+/// to `BRDF_ATLAS_MAX_SAMPLES`). So a preview and the full map of a
+/// window agree, and no preview waits for a field to be built: a
+/// 60 x 30 preview from a field costs well under a millisecond.
+///
+/// Ownership and returns as `brdf_atlas_model_map` (INVALID_ARGUMENT for
+/// `samples` 0).
+///
+/// # Safety
+/// As `brdf_atlas_model_map`, without a cancel flag.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn brdf_atlas_model_map_preview(
+    model: *const BrdfAtlasModel,
+    width: usize,
+    height: usize,
+    view: *const BrdfAtlasView,
+    samples: usize,
+    blend: i32,
+    buf: *mut f32,
+    len: usize,
+    variance: *mut f32,
+    variance_len: usize,
+) -> BrdfAtlasStatus {
+    run("brdf_atlas_model_map_preview", || {
+        let rule = map_rule(blend)?;
+        if samples == 0 {
+            return Err(Failure::invalid(
+                "a preview's samples must be 1 or more: they integrate the pixels no held \
+                 field covers",
+            ));
+        }
+        let variance = Some((variance, variance_len)).filter(|(p, _)| !p.is_null());
+        unsafe {
+            map_into(
+                model,
+                (width, height, view, samples, rule),
+                (&NoProgress, true),
                 (buf, len),
                 variance,
             )
@@ -374,21 +424,25 @@ unsafe fn albedo_map(
     len: usize,
 ) -> Result<(), Failure> {
     let request = (width, height, view, samples, rule);
-    unsafe { map_into(model, request, progress, (buf, len), None) }
+    unsafe { map_into(model, request, (progress, false), (buf, len), None) }
 }
 
 /// A map's size, window, samples and blend rule, as the C calls give them.
 type MapArgs = (usize, usize, *const BrdfAtlasView, usize, BlendRule);
 
 /// The map of `request` into the caller's `buf`, and its variance
-/// into `variance` when given; both written on success only.
+/// into `variance` when given; both written on success only. With
+/// `preview`, `samples` (non-zero) are the per-pixel rule's where the
+/// model holds nothing to draw from ([`MapRequest::preview`]).
+///
+/// [`MapRequest::preview`]: brdf_atlas_core::MapRequest::preview
 ///
 /// # Safety
 /// As `brdf_atlas_model_map` (`variance`'s pointer non-NULL).
 unsafe fn map_into(
     model: *const BrdfAtlasModel,
     (width, height, view, samples, rule): MapArgs,
-    progress: &dyn Progress,
+    (progress, preview): (&dyn Progress, bool),
     (buf, len): (*mut f32, usize),
     variance: Option<(*mut f32, usize)>,
 ) -> Result<(), Failure> {
@@ -402,13 +456,14 @@ unsafe fn map_into(
         None => None,
     };
     let samples = map_samples(samples)?;
-    let map = m.map(
-        brdf_atlas_core::MapRequest::new(width, height)
-            .view(view)
-            .samples(samples)
-            .rule(rule)
-            .progress(progress),
-    )?;
+    let request = brdf_atlas_core::MapRequest::new(width, height)
+        .view(view)
+        .rule(rule)
+        .progress(progress);
+    let map = m.map(match (preview, samples) {
+        (true, Some(s)) => request.preview(s),
+        _ => request.samples(samples),
+    })?;
     for (o, c) in out.chunks_exact_mut(3).zip(&map.rgb) {
         o.copy_from_slice(c);
     }

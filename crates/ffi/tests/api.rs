@@ -1,7 +1,8 @@
 //! The C functions called from Rust, for what the C and C++ consumers do
 //! not reach: models that are not 2-D, a raw-transform model's exact map,
 //! misaligned buffers, a map cancelled by its caller, the map's fields
-//! built, saved beside the model and read by the next handle.
+//! built, saved beside the model and read by the next handle, a preview
+//! drawn from the fields held and building none.
 
 use std::ffi::{CStr, CString};
 use std::path::{Path, PathBuf};
@@ -432,4 +433,92 @@ fn one_call_gives_the_map_and_its_variance() {
         );
         assert!(short.iter().all(|v| *v == -1.0));
     }
+}
+
+#[test]
+fn a_preview_draws_from_held_fields_and_builds_none() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = fit(tmp.path(), 2, TransformKind::Log);
+    let (w, ht) = (30, 20);
+    // A map of the default window by `call` (`brdf_atlas_model_map` or
+    // `_preview`) with `samples`.
+    type Call = unsafe extern "C" fn(
+        *const BrdfAtlasModel,
+        usize,
+        usize,
+        *const BrdfAtlasView,
+        usize,
+        i32,
+        *mut f32,
+        usize,
+        *mut f32,
+        usize,
+    ) -> BrdfAtlasStatus;
+    unsafe extern "C" fn full(
+        m: *const BrdfAtlasModel,
+        w: usize,
+        h: usize,
+        v: *const BrdfAtlasView,
+        s: usize,
+        b: i32,
+        rgb: *mut f32,
+        n: usize,
+        var: *mut f32,
+        vn: usize,
+    ) -> BrdfAtlasStatus {
+        unsafe { brdf_atlas_model_map(m, w, h, v, s, b, null(), rgb, n, var, vn) }
+    }
+    let draw = |h: &Handle, call: Call, samples: usize| {
+        let (mut rgb, mut var) = (vec![0.0f32; w * ht * 3], vec![0.0f32; w * ht]);
+        let s = unsafe {
+            call(
+                h.0,
+                w,
+                ht,
+                null(),
+                samples,
+                BRDF_ATLAS_BLEND_FLOOR,
+                rgb.as_mut_ptr(),
+                rgb.len(),
+                var.as_mut_ptr(),
+                var.len(),
+            )
+        };
+        assert_eq!(s, BrdfAtlasStatus::Ok, "{}", last_error());
+        (rgb, var)
+    };
+    let h = Handle::open(&path);
+    // Nothing held: every pixel from 16 samples, and nothing built.
+    let per_pixel = draw(&h, full, 16);
+    assert_eq!(draw(&h, brdf_atlas_model_map_preview, 16), per_pixel);
+    assert_eq!(draw(&h, brdf_atlas_model_map_preview, 16), per_pixel);
+    assert!(!brdf_atlas_core::fields_path(&path).exists());
+    // With the default window's field held: the full map's pixels.
+    let s = unsafe { brdf_atlas_model_prepare_map_fields(h.0, 512, 512, null(), null()) };
+    assert_eq!(s, BrdfAtlasStatus::Ok, "{}", last_error());
+    let from_field = draw(&h, full, 0);
+    assert_ne!(from_field.0, per_pixel.0);
+    assert_eq!(draw(&h, brdf_atlas_model_map_preview, 16), from_field);
+    // A new handle takes it from the file.
+    let again = Handle::open(&path);
+    assert_eq!(draw(&again, brdf_atlas_model_map_preview, 16), from_field);
+    // Refused: no samples for the pixels nothing covers, no model.
+    let mut rgb = vec![0.0f32; w * ht * 3];
+    let preview = |m: *const BrdfAtlasModel, samples: usize, rgb: &mut [f32]| unsafe {
+        brdf_atlas_model_map_preview(
+            m,
+            w,
+            ht,
+            null(),
+            samples,
+            BRDF_ATLAS_BLEND_FLOOR,
+            rgb.as_mut_ptr(),
+            rgb.len(),
+            null_mut(),
+            0,
+        )
+    };
+    assert_eq!(preview(h.0, 0, &mut rgb), BrdfAtlasStatus::InvalidArgument);
+    assert!(last_error().contains("samples"), "{}", last_error());
+    assert_eq!(preview(null(), 16, &mut rgb), BrdfAtlasStatus::NullArgument);
 }

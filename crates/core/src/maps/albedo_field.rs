@@ -96,6 +96,7 @@ const VARIANCE_LEVELS: [usize; 6] = [5, 9, 17, 33, 65, 129];
 /// albedo.
 pub const MIN_NODES: usize = 81;
 pub use crate::maps::patches::{CUT_RATIO, MAX_DEPTH};
+pub use crate::maps::view::domain_of;
 /// How many times its budget a field's plan ([`Atlas::plan_field`]) may
 /// take in nodes before the field is given up without exact nodes. The
 /// plan's values come from a coarser rule, whose albedo has more detail
@@ -337,6 +338,27 @@ impl Atlas {
             .filter(|c| holds(c))
             .filter_map(|c| c.field.clone())
             .min_by(|a, b| a.domain().area().total_cmp(&b.domain().area()))
+    }
+
+    /// A field the atlas holds (built in this process or saved beside the
+    /// model) whose domain holds `view`, for `rule`'s material: an exact
+    /// one if any, else a sampled one ([`FIELD_SAMPLES`]), each the one of
+    /// the smallest domain; with the sample count of its nodes. What a
+    /// preview draws from: nothing is built.
+    pub(crate) fn held_field(
+        &self,
+        view: View,
+        rule: BlendRule,
+    ) -> Result<Option<(Arc<AlbedoField>, Option<usize>)>> {
+        let floor = floor_of(rule)?;
+        let sampled = Some(FIELD_SAMPLES);
+        Ok(self
+            .covering_field(view, floor, None)
+            .map(|f| (f, None))
+            .or_else(|| {
+                self.covering_field(view, floor, sampled)
+                    .map(|f| (f, sampled))
+            }))
     }
 
     /// The field a `pixels`-pixel map of `view` of `rule`'s material draws
@@ -668,25 +690,4 @@ impl AlbedoField {
     pub(crate) fn variance_patches(&self) -> &[Patch] {
         &self.variance
     }
-}
-
-/// The domain of `view`: per axis, the smallest interval of the lattice of
-/// the default view's side over powers of two, offset by half lengths, that
-/// holds the view's interval (the view itself past 60 halvings or doublings).
-pub fn domain_of(view: View) -> View {
-    let d = View::default();
-    let axis = |a: f64, len: f64, v0: f64, v1: f64| -> (f64, f64) {
-        for k in (-60..=60).rev() {
-            let s = len * 2f64.powi(-k);
-            let i = ((v0 - a) / (0.5 * s)).floor();
-            let lo = a + i * 0.5 * s;
-            if lo <= v0 && lo + s >= v1 {
-                return (lo, lo + s);
-            }
-        }
-        (v0, v1)
-    };
-    let (x0, x1) = axis(d.x0, d.x1 - d.x0, view.x0, view.x1);
-    let (y0, y1) = axis(d.y0, d.y1 - d.y0, view.y0, view.y1);
-    View { x0, x1, y0, y1 }
 }

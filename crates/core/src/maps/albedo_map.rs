@@ -149,6 +149,13 @@ pub struct MapRequest<'a> {
     /// rule or the linear shortcut); `Some(s)`: each pixel integrated with
     /// an `s`-point rule.
     pub samples: Option<usize>,
+    /// `Some(s)` (with `samples` `None`): a preview, which builds nothing:
+    /// drawn from what the atlas holds (the prepared map where it serves
+    /// the view, else a field held or saved beside the model whose domain
+    /// holds the view), else every pixel integrated with an `s`-point
+    /// rule. So a preview of a view the atlas has a field for is the full
+    /// map at that size, and no preview waits for a field to be built.
+    pub preview: Option<usize>,
     /// The material at each pixel: the GP's blend or the soft floor's.
     pub rule: BlendRule,
     /// A prepared map to draw with, whether or not it is saved beside the
@@ -166,6 +173,7 @@ impl<'a> MapRequest<'a> {
             height,
             view: View::default(),
             samples: None,
+            preview: None,
             rule: BlendRule::default(),
             lattice: None,
             progress: &NoProgress,
@@ -180,6 +188,15 @@ impl<'a> MapRequest<'a> {
     /// Samples a pixel (`None`: the atlas chooses).
     pub fn samples(self, samples: Option<usize>) -> MapRequest<'a> {
         MapRequest { samples, ..self }
+    }
+
+    /// A preview: what the atlas holds, else `samples` samples a pixel
+    /// ([`MapRequest::preview`](MapRequest#structfield.preview)).
+    pub fn preview(self, samples: usize) -> MapRequest<'a> {
+        MapRequest {
+            preview: Some(samples),
+            ..self
+        }
     }
 
     /// The material at each pixel.
@@ -199,6 +216,19 @@ impl<'a> MapRequest<'a> {
     pub fn progress(self, progress: &'a dyn Progress) -> MapRequest<'a> {
         MapRequest { progress, ..self }
     }
+}
+
+/// How [`Atlas::draw`] may compute a map's albedo.
+#[derive(Clone, Copy)]
+pub(crate) enum Choice {
+    /// As the atlas chooses: the prepared map, a field (built if need be),
+    /// the per-pixel rule.
+    Any,
+    /// A preview: the prepared map or a field the atlas holds, else this
+    /// many samples a pixel.
+    Held(usize),
+    /// This many samples a pixel.
+    Samples(usize),
 }
 
 impl AlbedoMethod {
@@ -335,13 +365,19 @@ impl Atlas {
             height,
             view,
             samples,
+            preview,
             rule,
             lattice,
             progress,
         } = request;
+        let choice = match (samples, preview) {
+            (Some(s), _) => Choice::Samples(s),
+            (None, Some(s)) => Choice::Held(s),
+            (None, None) => Choice::Any,
+        };
         match lattice {
             Some(lattice) => self.map_prepared(lattice, width, height, view, progress),
-            None => self.draw(width, height, view, samples, rule, progress),
+            None => self.draw(width, height, view, choice, rule, progress),
         }
     }
 
@@ -351,7 +387,7 @@ impl Atlas {
         width: usize,
         height: usize,
         view: View,
-        samples: Option<usize>,
+        choice: Choice,
         rule: BlendRule,
         progress: &dyn Progress,
     ) -> Result<AlbedoMap> {
@@ -368,8 +404,8 @@ impl Atlas {
         let linear = self.model.file().transform.is_linear() && !floor;
         // A prepared map of this material draws the pixels in its window; a
         // damaged or stale one is left aside (`Atlas::prepared_map` says why).
-        let lattice = match samples {
-            None if !linear => self
+        let lattice = match choice {
+            Choice::Any | Choice::Held(_) if !linear => self
                 .prepared_map()
                 .ok()
                 .flatten()
@@ -377,19 +413,23 @@ impl Atlas {
             _ => None,
         };
         if let Some(l) = lattice
-            && let Some(map) = self.lattice_map(&l, (width, height, view), progress)?
+            && let Some(map) = self.lattice_map(&l, (width, height, view), choice, progress)?
         {
             return Ok(map);
         }
         // The exact field where it fits its budget, else the sampled one
-        // where that fits its own; else every pixel is integrated.
-        let field = match samples {
-            None if !linear => self.map_field(view, width * height, rule, progress)?,
+        // where that fits its own (a preview: only one held); else every
+        // pixel is integrated.
+        let field = match choice {
+            Choice::Any if !linear => self.map_field(view, width * height, rule, progress)?,
+            Choice::Held(_) if !linear => self.held_field(view, rule)?,
             _ => None,
         };
-        let samples = match samples {
-            None if !linear && field.is_none() => Some(DEFAULT_SAMPLES),
-            s => s,
+        let samples = match choice {
+            Choice::Samples(s) => Some(s),
+            _ if linear || field.is_some() => None,
+            Choice::Held(s) => Some(s),
+            Choice::Any => Some(DEFAULT_SAMPLES),
         };
         let method = match (field, samples) {
             (Some((field, sampled)), _) => {

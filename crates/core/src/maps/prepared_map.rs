@@ -8,7 +8,7 @@ use std::sync::{Arc, OnceLock};
 
 use crate::error::{CoreError, Result};
 use crate::maps::Atlas;
-use crate::maps::albedo_map::{AlbedoMap, AlbedoMethod};
+use crate::maps::albedo_map::{AlbedoMap, AlbedoMethod, Choice};
 use crate::maps::exact_albedos::{AlbedoRequest, Integration};
 use crate::maps::lattice::{
     AlbedoLattice, CHUNK, COARSEST, Drawn, FINEST, Key, Loaded, cubic, grids_of, lattice_path,
@@ -183,9 +183,9 @@ impl Atlas {
             )));
         }
         self.check_map_request(width, height, view)?;
-        match self.lattice_map(lattice, (width, height, view), progress)? {
+        match self.lattice_map(lattice, (width, height, view), Choice::Any, progress)? {
             Some(map) => Ok(map),
-            None => self.draw(width, height, view, None, lattice.rule, progress),
+            None => self.draw(width, height, view, Choice::Any, lattice.rule, progress),
         }
     }
 
@@ -195,11 +195,12 @@ impl Atlas {
         &self,
         lattice: &AlbedoLattice,
         (width, height, view): (usize, usize, View),
+        choice: Choice,
         progress: &dyn Progress,
     ) -> Result<Option<AlbedoMap>> {
         let rule = lattice.rule;
         let Some((rgb, variance, share)) =
-            self.draw_prepared(lattice, (width, height, view), rule, progress)?
+            self.draw_prepared(lattice, (width, height, view), (rule, choice), progress)?
         else {
             return Ok(None);
         };
@@ -215,13 +216,14 @@ impl Atlas {
     /// A `width x height` map of `view` drawn with the prepared map
     /// `lattice`: the pixels whose centres lie in its window from its
     /// cubic, the strips outside it (if any) as maps of their own without
-    /// it. The albedo, the variance and the share of pixels from the
-    /// lattice; `None` if no pixel lies in its window.
+    /// it, computed as `choice` allows. The albedo, the variance and the
+    /// share of pixels from the lattice; `None` if no pixel lies in its
+    /// window.
     pub(crate) fn draw_prepared(
         &self,
         lattice: &AlbedoLattice,
         (width, height, view): (usize, usize, View),
-        rule: BlendRule,
+        (rule, choice): (BlendRule, Choice),
         progress: &dyn Progress,
     ) -> Result<Option<Drawn>> {
         let Some((cols, rows)) = lattice.inside(width, height, view) else {
@@ -260,7 +262,7 @@ impl Atlas {
                 y0: view.y1 - dy * sr.end as f64,
                 y1: view.y1 - dy * sr.start as f64,
             };
-            let map = self.draw(sc.len(), sr.len(), strip, None, rule, progress)?;
+            let map = self.draw(sc.len(), sr.len(), strip, choice, rule, progress)?;
             for (k, py) in sr.clone().enumerate() {
                 let (from, to) = (
                     k * sc.len()..(k + 1) * sc.len(),

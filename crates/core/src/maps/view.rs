@@ -102,3 +102,24 @@ impl View {
         ]
     }
 }
+
+/// The domain of `view`: per axis, the smallest interval of the lattice of
+/// the default view's side over powers of two, offset by half lengths, that
+/// holds the view's interval (the view itself past 60 halvings or doublings).
+pub fn domain_of(view: View) -> View {
+    let d = View::default();
+    let axis = |a: f64, len: f64, v0: f64, v1: f64| -> (f64, f64) {
+        for k in (-60..=60).rev() {
+            let s = len * 2f64.powi(-k);
+            let i = ((v0 - a) / (0.5 * s)).floor();
+            let lo = a + i * 0.5 * s;
+            if lo <= v0 && lo + s >= v1 {
+                return (lo, lo + s);
+            }
+        }
+        (v0, v1)
+    };
+    let (x0, x1) = axis(d.x0, d.x1 - d.x0, view.x0, view.x1);
+    let (y0, y1) = axis(d.y0, d.y1 - d.y0, view.y0, view.y1);
+    View { x0, x1, y0, y1 }
+}
