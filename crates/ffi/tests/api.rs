@@ -468,11 +468,11 @@ fn a_preview_draws_from_held_fields_and_builds_none() {
     ) -> BrdfAtlasStatus {
         unsafe { brdf_atlas_model_map(m, w, h, v, s, b, null(), rgb, n, var, vn) }
     }
-    let draw = |h: &Handle, call: Call, samples: usize| {
+    let run = |m: *const BrdfAtlasModel, call: Call, samples: usize| {
         let (mut rgb, mut var) = (vec![0.0f32; w * ht * 3], vec![0.0f32; w * ht]);
         let s = unsafe {
             call(
-                h.0,
+                m,
                 w,
                 ht,
                 null(),
@@ -484,6 +484,10 @@ fn a_preview_draws_from_held_fields_and_builds_none() {
                 var.len(),
             )
         };
+        (s, rgb, var)
+    };
+    let draw = |h: &Handle, call: Call, samples: usize| {
+        let (s, rgb, var) = run(h.0, call, samples);
         assert_eq!(s, BrdfAtlasStatus::Ok, "{}", last_error());
         (rgb, var)
     };
@@ -503,22 +507,8 @@ fn a_preview_draws_from_held_fields_and_builds_none() {
     let again = Handle::open(&path);
     assert_eq!(draw(&again, brdf_atlas_model_map_preview, 16), from_field);
     // Refused: no samples for the pixels nothing covers, no model.
-    let mut rgb = vec![0.0f32; w * ht * 3];
-    let preview = |m: *const BrdfAtlasModel, samples: usize, rgb: &mut [f32]| unsafe {
-        brdf_atlas_model_map_preview(
-            m,
-            w,
-            ht,
-            null(),
-            samples,
-            BRDF_ATLAS_BLEND_FLOOR,
-            rgb.as_mut_ptr(),
-            rgb.len(),
-            null_mut(),
-            0,
-        )
-    };
-    assert_eq!(preview(h.0, 0, &mut rgb), BrdfAtlasStatus::InvalidArgument);
+    let preview = brdf_atlas_model_map_preview;
+    assert_eq!(run(h.0, preview, 0).0, BrdfAtlasStatus::InvalidArgument);
     assert!(last_error().contains("samples"), "{}", last_error());
-    assert_eq!(preview(null(), 16, &mut rgb), BrdfAtlasStatus::NullArgument);
+    assert_eq!(run(null(), preview, 16).0, BrdfAtlasStatus::NullArgument);
 }
