@@ -194,6 +194,21 @@ fn atlas(c: &mut Criterion) {
             )
         });
     }
+    // The panel's preview of its first window (a sixth of its side) on an
+    // atlas that has read the fields: drawn from the saved field, and, as
+    // before previews took held fields, from 64 samples a pixel.
+    let warm = fresh();
+    let (pw, ph) = (322usize.div_ceil(6), 160usize.div_ceil(6));
+    let request = || brdf_atlas_core::MapRequest::new(pw, ph).view(panel);
+    warm.map(request().preview(64)).expect("the fields read");
+    for (name, request) in [
+        ("from_field", request().preview(64)),
+        ("per_pixel_64", request().samples(Some(64))),
+    ] {
+        g.bench_function(BenchmarkId::new("log_panel_preview", name), |b| {
+            b.iter(|| warm.map(request).expect("preview"))
+        });
+    }
     std::fs::remove_file(&fields).expect("the fields saved");
     // The prepared map: a 1024 x 1024 map of the default view and of a
     // view a hundred times smaller, each pixel the cubic of the lattice.

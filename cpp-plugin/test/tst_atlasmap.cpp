@@ -248,6 +248,10 @@ private slots:
             QCOMPARE(first.image.size(), preview);
             QVERIFY2(sameAsLibraryMap(m, first.image, first.window, AtlasMapView::kPreviewSamples, true),
                      gesture);
+            // Every window here lies inside the fields `fit` saved: the
+            // preview is drawn from them, not from 64 samples a pixel.
+            QVERIFY2(!sameAsLibraryMap(m, first.image, first.window, AtlasMapView::kPreviewSamples),
+                     gesture);
             QCOMPARE(last.level, AtlasMapView::kFull);
             QCOMPARE(last.image.size(), full);
             QVERIFY2(sameAsLibraryMap(m, last.image, last.window, 0), gesture);
