@@ -271,9 +271,9 @@ public:
     }
 
     /// What a viewer draws while its window moves (brdf_atlas_model_map_preview):
-    /// from the prepared map or a field the model holds, the same pixels as
-    /// map() gives, never building anything; elsewhere every pixel
-    /// integrated with `samples` (at least 1) samples.
+    /// from the prepared map or a field the model holds (map()'s pixels
+    /// wherever map() draws from the same field), never building anything;
+    /// elsewhere every pixel integrated with `samples` (at least 1) samples.
     Map preview(std::size_t width, std::size_t height, const View &view, std::size_t samples,
                 std::int32_t blend = BRDF_ATLAS_BLEND_FLOOR) const {
         if (width == 0 || height == 0 || width > BRDF_ATLAS_MAX_MAP_SIDE ||

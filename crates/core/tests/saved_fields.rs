@@ -247,7 +247,6 @@ fn a_sampled_fields_check_is_its_error_against_the_dense_rule_at_its_points() {
         "check {check:?}, recomputed {worst} / {mean}"
     );
     assert!(check.worst > 1e-3, "16 samples are visibly off: {check:?}");
-    assert!(check.mean <= check.worst);
 }
 
 #[test]
@@ -257,12 +256,19 @@ fn a_fields_check_is_saved_and_a_file_without_one_still_serves() {
     let first = atlas(&path);
     let built = sampled(&first, 16);
     first.save_fields().unwrap();
-    let read = sampled(&atlas(&path), 16);
-    assert_eq!(
-        read.check(),
-        built.check(),
-        "the check comes back from the file"
-    );
+    assert_eq!(sampled(&atlas(&path), 16).check(), built.check());
+    // What the file says is what a new atlas reports (a field built anew
+    // would carry its own, measured check).
+    edit_file(&path, |json| {
+        for entry in json["entries"].as_array_mut().unwrap() {
+            if let Some(check) = entry["field"].get_mut("check").filter(|c| !c.is_null()) {
+                check["worst"] = serde_json::json!(0.125);
+            }
+        }
+    });
+    let read = sampled(&atlas(&path), 16).check().expect("a check");
+    assert_eq!(read.worst, 0.125);
+    assert_eq!(read.mean, built.check().unwrap().mean);
     // A file written before fields were checked: no check, still used
     // (a field built anew would carry one).
     edit_file(&path, |json| {

@@ -149,12 +149,15 @@ pub struct MapRequest<'a> {
     /// rule or the linear shortcut); `Some(s)`: each pixel integrated with
     /// an `s`-point rule.
     pub samples: Option<usize>,
-    /// `Some(s)` (with `samples` `None`): a preview, which builds nothing:
-    /// drawn from what the atlas holds (the prepared map where it serves
-    /// the view, else a field held or saved beside the model whose domain
-    /// holds the view), else every pixel integrated with an `s`-point
-    /// rule. So a preview of a view the atlas has a field for is the full
-    /// map at that size, and no preview waits for a field to be built.
+    /// `Some(s)`: a preview, which builds nothing: drawn from what the
+    /// atlas holds (the prepared map where it serves the view, else a
+    /// field held or saved beside the model whose domain holds the view),
+    /// else every pixel integrated with an `s`-point rule. Wherever the
+    /// full map draws from the same held field or prepared map, the
+    /// preview has its pixels (the full map may instead build the exact
+    /// field of a small view that only a sampled field covers), and no
+    /// preview waits for a field to be built. Not read when `samples` is
+    /// `Some`: a sample count asks for per-pixel integration outright.
     pub preview: Option<usize>,
     /// The material at each pixel: the GP's blend or the soft floor's.
     pub rule: BlendRule,
@@ -344,8 +347,8 @@ impl Atlas {
     ///
     /// - With a prepared map ([`MapRequest::lattice`]; a lattice of another
     ///   fit is refused) the pixels in its window come from its cubic and the
-    ///   rest are drawn as without it, of the lattice's material; the
-    ///   request's rule and samples are not read.
+    ///   rest are drawn as without it (a preview's as a preview's), of the
+    ///   lattice's material; the request's rule and samples are not read.
     /// - Otherwise `samples` `None` uses the prepared map saved beside the
     ///   model where it serves the view and rule ([`Atlas::prepared_map`]),
     ///   else the albedo field ([`Atlas::field`]) where it fits its budget,
@@ -355,6 +358,9 @@ impl Atlas {
     ///   material ([`BlendRule::Floor`]) is not linear in the weights, so
     ///   even a raw-transform map of it takes the field or the per-pixel
     ///   rule. The plausible rule has no map.
+    /// - A preview ([`MapRequest::preview`], without `samples`) takes the
+    ///   prepared map or a field the atlas holds, else its own sample count
+    ///   a pixel, and builds nothing.
     ///
     /// Once the request's progress is [cancelled](Progress::cancelled) (it
     /// must then stay so) the map stops within a row or a field refinement
@@ -376,7 +382,15 @@ impl Atlas {
             (None, None) => Choice::Any,
         };
         match lattice {
-            Some(lattice) => self.map_prepared(lattice, width, height, view, progress),
+            Some(lattice) => {
+                // A given prepared map reads no sample count; a preview
+                // still builds nothing outside it.
+                let choice = match choice {
+                    Choice::Held(s) => Choice::Held(s),
+                    _ => Choice::Any,
+                };
+                self.map_prepared(lattice, (width, height, view), choice, progress)
+            }
             None => self.draw(width, height, view, choice, rule, progress),
         }
     }

@@ -15,9 +15,9 @@ use crate::maps::Atlas;
 use crate::maps::patches::{Patch, eval_point, find};
 use crate::maps::view::View;
 
-/// Points a sampled field is checked at: 32 exact albedos, about 0.15 s
-/// for 100 materials at the MERL resolution on two cores (a sampled field
-/// of the default view takes 1.7 s to build).
+/// Points a sampled field is checked at: 32 exact albedos, 0.17 s for 100
+/// materials at the MERL resolution on two cores (a sampled field of the
+/// default view takes about 2 s to build).
 pub const CHECK_POINTS: usize = 32;
 
 /// A sampled field's error against exact albedos at [`CHECK_POINTS`]

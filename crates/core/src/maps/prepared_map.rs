@@ -167,13 +167,13 @@ impl Atlas {
     /// A `width x height` map of `view` of `lattice`'s material, drawn with
     /// `lattice` whether or not it is saved beside the model: the pixels in
     /// its window from its cubic, the rest as [`Atlas::map`] draws them
-    /// without it. A lattice of another fit is refused.
+    /// without it, as `choice` allows (a preview builds nothing). A
+    /// lattice of another fit is refused.
     pub(crate) fn map_prepared(
         &self,
         lattice: &AlbedoLattice,
-        width: usize,
-        height: usize,
-        view: View,
+        (width, height, view): (usize, usize, View),
+        choice: Choice,
         progress: &dyn Progress,
     ) -> Result<AlbedoMap> {
         if lattice.fingerprint != self.fingerprint() {
@@ -183,9 +183,9 @@ impl Atlas {
             )));
         }
         self.check_map_request(width, height, view)?;
-        match self.lattice_map(lattice, (width, height, view), Choice::Any, progress)? {
+        match self.lattice_map(lattice, (width, height, view), choice, progress)? {
             Some(map) => Ok(map),
-            None => self.draw(width, height, view, Choice::Any, lattice.rule, progress),
+            None => self.draw(width, height, view, choice, lattice.rule, progress),
         }
     }
 

@@ -169,7 +169,10 @@ impl Entry {
             budget: c.budget,
             field: c.field.as_ref().map(|f| SavedField {
                 nodes: f.nodes(),
-                check: f.check(),
+                // A check that is not a number would not read back.
+                check: f
+                    .check()
+                    .filter(|c| c.worst.is_finite() && c.mean.is_finite()),
                 albedo: f.albedo_patches().iter().map(SavedPatch::of).collect(),
                 variance: f.variance_patches().iter().map(SavedPatch::of).collect(),
             }),
