@@ -5,31 +5,22 @@
 //! beside a given prepared map its strips are integrated per pixel, not
 //! drawn from fields built for them.
 
-use std::path::{Path, PathBuf};
+mod common;
 
 use brdf_atlas_core::{
-    AlbedoMethod, Atlas, BlendRule, FitOptions, GplvmParams, LATTICE_TOLERANCE, MapRequest, Model,
-    NoProgress, Precision, TransformKind, View, fit_dir,
+    AlbedoMethod, Atlas, BlendRule, LATTICE_TOLERANCE, MapRequest, Model, NoProgress,
+    TransformKind, View,
 };
-use brdf_merl::{Dims, synth};
 
-fn fit(dir: &Path) -> PathBuf {
-    let data = dir.join("data");
-    synth::write_dir(&data, 10, Dims::new(8, 8, 16).unwrap(), 7).unwrap();
-    let model = dir.join("m.atlas");
-    let options = FitOptions {
-        params: GplvmParams::new(2).check().unwrap(),
-        transform: TransformKind::Log,
-        precision: Precision::F32,
-    };
-    fit_dir(&data, &model, &options, &NoProgress).unwrap();
-    model
+/// The atlas of a model of 10 synthetic materials, fitted in `dir`.
+fn atlas(dir: &std::path::Path) -> Atlas {
+    Atlas::new(Model::open(common::fit(dir, 10, TransformKind::Log)).unwrap())
 }
 
 #[test]
 fn a_preview_draws_what_is_held_and_builds_nothing() {
     let tmp = tempfile::tempdir().unwrap();
-    let atlas = Atlas::new(Model::open(fit(tmp.path())).unwrap());
+    let atlas = atlas(tmp.path());
     let (w, h) = (40, 30);
     let request = || MapRequest::new(w, h).view(View::default());
     // Nothing held: the 16-sample map, and nothing new to save after it.
@@ -57,14 +48,17 @@ fn a_preview_draws_what_is_held_and_builds_nothing() {
     let (method, _) = atlas
         .prepare_fields(large, BlendRule::Floor, &NoProgress)
         .unwrap();
-    assert!(
-        matches!(method, Some(AlbedoMethod::Field { .. })),
-        "{method:?}"
-    );
+    let method = method.expect("a field for the large map");
     let full = atlas.map(request()).unwrap();
     assert_ne!(full.rgb, per_pixel.rgb);
+    // The small map draws from the large one's field (a sampled one here:
+    // its domain's exact field is over the small map's budget).
     assert!(
-        matches!(full.method, AlbedoMethod::Field { .. }),
+        matches!(method, AlbedoMethod::SampledField { .. }),
+        "{method:?}"
+    );
+    assert!(
+        matches!(full.method, AlbedoMethod::SampledField { nodes, .. } if Some(nodes) == nodes_of(&method)),
         "{:?}",
         full.method
     );
@@ -76,7 +70,7 @@ fn a_preview_draws_what_is_held_and_builds_nothing() {
 #[test]
 fn a_preview_beside_a_given_prepared_map_builds_nothing_outside_it() {
     let tmp = tempfile::tempdir().unwrap();
-    let atlas = Atlas::new(Model::open(fit(tmp.path())).unwrap());
+    let atlas = atlas(tmp.path());
     let lattice = atlas
         .prepare_map(BlendRule::Floor, LATTICE_TOLERANCE, &NoProgress)
         .unwrap();
@@ -122,4 +116,12 @@ fn a_preview_beside_a_given_prepared_map_builds_nothing_outside_it() {
         atlas.save_fields().unwrap().is_some(),
         "the full map's strips built fields"
     );
+}
+
+/// The nodes of a field's method.
+fn nodes_of(method: &AlbedoMethod) -> Option<usize> {
+    match *method {
+        AlbedoMethod::Field { nodes, .. } | AlbedoMethod::SampledField { nodes, .. } => Some(nodes),
+        _ => None,
+    }
 }
