@@ -258,14 +258,13 @@ pub unsafe extern "C" fn brdf_atlas_model_map(
     run("brdf_atlas_model_map", || {
         let rule = map_rule(blend)?;
         let progress = unsafe { optional_cancel(cancel) }?;
-        let variance = Some((variance, variance_len)).filter(|(p, _)| !p.is_null());
         unsafe {
             map_into(
                 model,
                 (width, height, view, samples, rule),
                 (&*progress, false),
                 (buf, len),
-                variance,
+                (variance, variance_len),
             )
         }
     })
@@ -310,14 +309,13 @@ pub unsafe extern "C" fn brdf_atlas_model_map_preview(
                  field covers",
             ));
         }
-        let variance = Some((variance, variance_len)).filter(|(p, _)| !p.is_null());
         unsafe {
             map_into(
                 model,
                 (width, height, view, samples, rule),
                 (&NoProgress, true),
                 (buf, len),
-                variance,
+                (variance, variance_len),
             )
         }
     })
@@ -426,36 +424,39 @@ unsafe fn albedo_map(
     len: usize,
 ) -> Result<(), Failure> {
     let request = (width, height, view, samples, rule);
-    unsafe { map_into(model, request, (progress, false), (buf, len), None) }
+    let no_variance = (std::ptr::null_mut(), 0);
+    unsafe { map_into(model, request, (progress, false), (buf, len), no_variance) }
 }
 
 /// A map's size, window, samples and blend rule, as the C calls give them.
 type MapArgs = (usize, usize, *const BrdfAtlasView, usize, BlendRule);
 
 /// The map of `request` into the caller's `buf`, and its variance
-/// into `variance` when given; both written on success only. With
+/// into `variance` unless its pointer is NULL; both written on success
+/// only. With
 /// `preview`, `samples` (non-zero) are the per-pixel rule's where the
 /// model holds nothing to draw from ([`MapRequest::preview`]).
 ///
 /// [`MapRequest::preview`]: brdf_atlas_core::MapRequest::preview
 ///
 /// # Safety
-/// As `brdf_atlas_model_map` (`variance`'s pointer non-NULL).
+/// As `brdf_atlas_model_map`.
 unsafe fn map_into(
     model: *const BrdfAtlasModel,
     (width, height, view, samples, rule): MapArgs,
     (progress, preview): (&dyn Progress, bool),
     (buf, len): (*mut f32, usize),
-    variance: Option<(*mut f32, usize)>,
+    (variance, variance_len): (*mut f32, usize),
 ) -> Result<(), Failure> {
     let m = unsafe { handle::borrow(model) }?;
     check::planar(m)?;
     let view = unsafe { map_window(view, width, height) }?;
     let values = check::product(&[width, height, 3], "map size")?;
     let out = unsafe { check::buffer(buf, len, values, "buf") }?;
-    let var_out = match variance {
-        Some((p, n)) => Some(unsafe { check::buffer(p, n, width * height, "variance") }?),
-        None => None,
+    let var_out = if variance.is_null() {
+        None
+    } else {
+        Some(unsafe { check::buffer(variance, variance_len, width * height, "variance") }?)
     };
     let samples = map_samples(samples)?;
     let request = brdf_atlas_core::MapRequest::new(width, height)

@@ -541,7 +541,7 @@ impl Atlas {
         else {
             return Ok(None);
         };
-        Ok(Some(self.with_variance(domain, albedo, nodes, None)?))
+        Ok(Some(self.with_variance(domain, albedo, nodes)?))
     }
 
     /// The sampled field of `domain` ([`Atlas::sampled_field`]): the
@@ -587,23 +587,13 @@ impl Atlas {
                 }
             }
         }
-        let check = self.check_field(domain, &albedo, floor)?;
-        Ok(Some(self.with_variance(
-            domain,
-            albedo,
-            nodes,
-            Some(check),
-        )?))
+        let mut field = self.with_variance(domain, albedo, nodes)?;
+        field.check = Some(self.check_field(&field, floor)?);
+        Ok(Some(field))
     }
 
     /// A field of `domain` from its albedo patches, with the variance's.
-    fn with_variance(
-        &self,
-        domain: View,
-        albedo: Vec<Patch>,
-        nodes: usize,
-        check: Option<FieldCheck>,
-    ) -> Result<AlbedoField> {
+    fn with_variance(&self, domain: View, albedo: Vec<Patch>, nodes: usize) -> Result<AlbedoField> {
         let variance = refine(
             domain,
             1,
@@ -618,7 +608,7 @@ impl Atlas {
             albedo,
             variance,
             nodes,
-            check,
+            check: None,
         })
     }
 }

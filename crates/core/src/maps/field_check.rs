@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::Result;
 use crate::map_error::albedo_error;
 use crate::maps::Atlas;
-use crate::maps::patches::{Patch, eval_point, find};
+use crate::maps::albedo_field::AlbedoField;
 use crate::maps::view::View;
 
 /// Points a sampled field is checked at: 32 exact albedos, 0.17 s for 100
@@ -49,25 +49,13 @@ pub fn check_points(domain: View) -> Vec<[f64; 2]> {
 }
 
 impl Atlas {
-    /// The check of albedo `patches` covering `domain` ([`FieldCheck`]):
-    /// one pass over the nodes' rule's rows for all the points. `floor`:
-    /// every value on its soft floor.
-    pub(crate) fn check_field(
-        &self,
-        domain: View,
-        patches: &[Patch],
-        floor: bool,
-    ) -> Result<FieldCheck> {
-        let points = check_points(domain);
+    /// The check of `field` ([`FieldCheck`]): its albedo
+    /// ([`AlbedoField::at`]) against one pass over the nodes' rule's rows
+    /// for all the points. `floor`: every value on its soft floor.
+    pub(crate) fn check_field(&self, field: &AlbedoField, floor: bool) -> Result<FieldCheck> {
+        let points = check_points(field.domain());
         let exact = self.albedos_over(self.node_rows(), &points, floor)?;
-        // As the field gives its albedo ([`AlbedoField::at`]): clamped at 0.
-        let got: Vec<[f64; 3]> = points
-            .iter()
-            .map(|&x| {
-                let a = eval_point(find(patches, x), x, 3);
-                [a[0].max(0.0), a[1].max(0.0), a[2].max(0.0)]
-            })
-            .collect();
+        let got: Vec<[f64; 3]> = points.iter().map(|&x| field.at(x).0).collect();
         let (worst, mean) = albedo_error(&got, &exact);
         Ok(FieldCheck {
             points: points.len(),
