@@ -588,7 +588,7 @@ impl Atlas {
             }
         }
         let mut field = self.with_variance(domain, albedo, nodes)?;
-        field.check = Some(self.check_field(&field, floor)?);
+        field.check = Some(self.check_field(domain, |x| field.at(x).0, floor)?);
         Ok(Some(field))
     }
 

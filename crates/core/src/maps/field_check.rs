@@ -12,7 +12,6 @@ use serde::{Deserialize, Serialize};
 use crate::error::Result;
 use crate::map_error::albedo_error;
 use crate::maps::Atlas;
-use crate::maps::albedo_field::AlbedoField;
 use crate::maps::view::View;
 
 /// Points a sampled field is checked at: 32 exact albedos, 0.17 s for 100
@@ -49,13 +48,20 @@ pub fn check_points(domain: View) -> Vec<[f64; 2]> {
 }
 
 impl Atlas {
-    /// The check of `field` ([`FieldCheck`]): its albedo
-    /// ([`AlbedoField::at`]) against one pass over the nodes' rule's rows
-    /// for all the points. `floor`: every value on its soft floor.
-    pub(crate) fn check_field(&self, field: &AlbedoField, floor: bool) -> Result<FieldCheck> {
-        let points = check_points(field.domain());
+    /// The check ([`FieldCheck`]) of a field of `domain` whose albedo at a
+    /// point is `albedo` (a built field's
+    /// [`AlbedoField::at`](crate::AlbedoField::at)), against one pass over
+    /// the nodes' rule's rows for all the points. `floor`: every value on
+    /// its soft floor.
+    pub(crate) fn check_field(
+        &self,
+        domain: View,
+        albedo: impl Fn([f64; 2]) -> [f64; 3],
+        floor: bool,
+    ) -> Result<FieldCheck> {
+        let points = check_points(domain);
         let exact = self.albedos_over(self.node_rows(), &points, floor)?;
-        let got: Vec<[f64; 3]> = points.iter().map(|&x| field.at(x).0).collect();
+        let got: Vec<[f64; 3]> = points.iter().map(|&x| albedo(x)).collect();
         let (worst, mean) = albedo_error(&got, &exact);
         Ok(FieldCheck {
             points: points.len(),
